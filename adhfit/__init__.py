@@ -1,0 +1,6 @@
+"""adhfit: adhesion tests with an inflated elastic membrane.
+
+Forward model (Yang, Srivastava & Long, large-stretch neo-Hookean membrane against a rigid sphere or
+flat) and fits of the work of adhesion, the membrane stiffness and the interface slip condition.
+"""
+__version__ = "0.1.0"

@@ -1,0 +1,87 @@
+"""Exceptions raised by adhfit.
+
+Every exception subclasses an ordinary Python error so callers can catch either the adhfit type
+or the built-in one, and carries the data needed to act on it.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+
+class AdhfitError(Exception):
+    """Base class of every error adhfit raises on purpose."""
+
+
+class InputError(AdhfitError, ValueError):
+    """A parameter is outside its valid range.
+
+    Parameters
+    ----------
+    name : str
+        Parameter name as the user wrote it (keyword or CLI option).
+    value : Any
+        The offending value.
+    valid : str
+        Human-readable description of the valid range, e.g. ``"a float in (0, 1)"``.
+    reason : str, optional
+        Extra explanation (e.g. the cross-parameter constraint that failed).
+    """
+
+    def __init__(self, name: str, value: Any, valid: str, reason: str = "") -> None:
+        self.name = name
+        self.value = value
+        self.valid = valid
+        self.reason = reason
+        msg = f"The '{name}' parameter must be {valid}. Got {value!r} instead."
+        if reason:
+            msg += f" {reason}"
+        super().__init__(msg)
+
+
+class ConvergenceError(AdhfitError, RuntimeError):
+    """A root solve or continuation failed; carries the inputs that made it fail.
+
+    Parameters
+    ----------
+    what : str
+        Which solve failed (e.g. ``"no-slip pinning: C2 for given alpha"``).
+    inputs : dict
+        The dimensionless inputs of the failed solve.
+    """
+
+    def __init__(self, what: str, inputs: dict[str, Any] | None = None) -> None:
+        self.what = what
+        self.inputs = dict(inputs or {})
+        detail = ", ".join(f"{k}={v!r}" for k, v in self.inputs.items())
+        super().__init__(f"{what} did not converge" + (f" ({detail})" if detail else ""))
+
+
+class DataError(AdhfitError, ValueError):
+    """A data or scene file cannot be used as given.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in one line.
+    path : str, optional
+        File concerned.
+    column : str, optional
+        Column concerned.
+    line : int, optional
+        1-based line number in the file (header is line 1).
+    """
+
+    def __init__(self, message: str, *, path: str | None = None, column: str | None = None,
+                 line: int | None = None) -> None:
+        self.path = path
+        self.column = column
+        self.line = line
+        where = []
+        if path is not None:
+            where.append(str(path))
+        if line is not None:
+            where.append(f"line {line}")
+        if column is not None:
+            where.append(f"column '{column}'")
+        prefix = (", ".join(where) + ": ") if where else ""
+        super().__init__(prefix + message)
