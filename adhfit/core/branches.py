@@ -1,0 +1,243 @@
+"""Solvable branches: each (stage, slip) pair as a locator, at most one unknown, and a residual.
+
+A state on a branch is fixed by its locator (the contact radius ``a`` while making contact or
+delaminating, the contact angle ``alpha`` while pinned), the pressure kappa and, where the stage is
+implicit, one unknown ``x`` solved from the material condition J0 = ln(beta/rho) (eqs. 41-42, 57).
+Under pressure control kappa is a second unknown, solved from the gap condition d = d_fix.
+
+=====================  =======  =========  ==============================================
+branch                 locator  unknown x  condition
+=====================  =======  =========  ==============================================
+making_contact         a        --         explicit (eqs. 19, 25, 26)
+pinning, no-slip       alpha    t          J0 = L_m at a = a_m (eqs. 39, 41/42)
+pinning, frictionless  alpha    a          J0 = L_m (eq. 57)
+delamination, no-slip  a        t          J0 = L_d(a) (eq. 61), alpha from G = w (eq. 62)
+delamination, frict.   a        --         explicit, alpha = atan sqrt(2w) (eq. 63)
+=====================  =======  =========  ==============================================
+
+Dimensionless throughout (DESIGN.md A1/B1).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..errors import ConvergenceError
+from . import delamination, making_contact, pinning
+from .membrane import free_membrane, substrate_cos
+from .solve import STEP, newton
+
+__all__ = ["Context", "Branch", "BRANCHES", "evaluate", "solve_unknown", "solve_state", "derivative"]
+
+
+@dataclass(frozen=True)
+class Context:
+    """Per-history constants: substrate curvature c = 1/rs, w, and the end of loading.
+
+    Attributes
+    ----------
+    c : float
+        b/R_s (0 for a flat substrate).
+    w : float
+        W_ad/(mu h).
+    a_m : float
+        Contact radius at the end of loading.
+    L_m : float
+        ln(beta/rho_am), material coordinate of the edge at the end of loading (eq. 37).
+    """
+
+    c: float
+    w: float
+    a_m: float = float("nan")
+    L_m: float = float("nan")
+
+
+@dataclass(frozen=True)
+class Branch:
+    """One stage under one slip condition (see the module table)."""
+
+    stage: str
+    slip: str
+    locator: str
+    unpack: Callable          # (x, kappa, loc, ctx) -> (a, alpha, D, C2, G)
+    target: Callable | None   # (loc, ctx) -> L, the J0 the state must have; None when explicit
+    bracket: Callable | None  # (kappa, loc, ctx) -> (lo, hi) for x
+
+
+def _mc(x, kappa, loc, ctx):
+    D, C2 = making_contact.constants(kappa, loc, ctx.c)
+    z = 0.0 * D
+    return loc + z, z, D, C2, z
+
+
+def _pin_ns(x, kappa, loc, ctx):
+    a = ctx.a_m + 0.0 * x
+    D, C2 = pinning.noslip_constants(kappa, a, ctx.c, loc, x)
+    return a, loc + 0.0 * x, D, C2, pinning.noslip_release_rate(loc, x)
+
+
+def _pin_fr(x, kappa, loc, ctx):
+    D, C2 = pinning.frictionless_constants(kappa, x, ctx.c, loc)
+    return x, loc + 0.0 * x, D, C2, pinning.frictionless_release_rate(loc) + 0.0 * x
+
+
+def _del_ns(x, kappa, loc, ctx):
+    alpha = delamination.noslip_angle(x, ctx.w)
+    D, C2 = pinning.noslip_constants(kappa, loc, ctx.c, alpha, x)
+    return loc + 0.0 * x, alpha, D, C2, ctx.w + 0.0 * D
+
+
+def _del_fr(x, kappa, loc, ctx):
+    alpha = delamination.frictionless_angle(ctx.w)
+    D, C2 = pinning.frictionless_constants(kappa, loc, ctx.c, alpha)
+    return loc + 0.0 * D, alpha + 0.0 * D, D, C2, ctx.w + 0.0 * D
+
+
+def _a_limit(ctx):
+    # contact stays on the upper hemisphere and inside the clamp
+    return (1.0 - 1e-9) * (min(1.0, 1.0 / ctx.c) if ctx.c > 0 else 1.0)
+
+
+BRANCHES: dict[tuple[str, str], Branch] = {
+    ("making_contact", "no-slip"): Branch("making_contact", "no-slip", "a", _mc, None, None),
+    ("making_contact", "frictionless"): Branch("making_contact", "frictionless", "a", _mc, None, None),
+    ("pinning", "no-slip"): Branch(
+        "pinning", "no-slip", "alpha", _pin_ns, lambda loc, ctx: ctx.L_m,
+        lambda kappa, loc, ctx: pinning.noslip_stretch_bracket(loc, ctx.w)),
+    ("pinning", "frictionless"): Branch(
+        "pinning", "frictionless", "alpha", _pin_fr, lambda loc, ctx: ctx.L_m,
+        lambda kappa, loc, ctx: (1e-9 * ctx.a_m, _a_limit(ctx))),
+    ("delamination", "no-slip"): Branch(
+        "delamination", "no-slip", "a", _del_ns,
+        lambda loc, ctx: delamination.noslip_material(loc, ctx.a_m, ctx.c, ctx.L_m),
+        lambda kappa, loc, ctx: delamination.noslip_stretch_bracket(ctx.w)),
+    ("delamination", "frictionless"): Branch("delamination", "frictionless", "a", _del_fr, None, None),
+}
+
+
+def evaluate(branch: Branch, x, kappa, loc, ctx: Context) -> dict:
+    """All observables of the states (x, kappa) at locators ``loc``; complex-safe.
+
+    Returns
+    -------
+    dict
+        ``a, alpha, p, d, f, G, J0, ok`` arrays (``p`` is kappa; ``ok`` False outside the model).
+    """
+    a, alpha, D, C2, G = branch.unpack(x, kappa, loc, ctx)
+    _, cos_ta = _edge_cos(a, ctx.c, alpha)
+    J0, d, ok = free_membrane(kappa, D, C2, a, ctx.c, cos_ta)
+    return {"a": a, "alpha": alpha, "p": kappa + 0.0 * D, "d": d, "f": -np.pi * D, "G": G,
+            "J0": J0, "ok": ok}
+
+
+def _edge_cos(a, c, alpha):
+    s, ac = substrate_cos(a, c), a * c
+    return s * np.sin(alpha) - ac * np.cos(alpha), s * np.cos(alpha) + ac * np.sin(alpha)
+
+
+def _residual(branch, x, kappa, loc, ctx):
+    return evaluate(branch, x, kappa, loc, ctx)["J0"] - branch.target(loc, ctx)
+
+
+def solve_unknown(branch: Branch, kappa, loc, ctx: Context, x0=None) -> np.ndarray | None:
+    """Solve the branch's unknown x at real (kappa, loc); None for explicit branches."""
+    if branch.target is None:
+        return None
+    kappa, loc = np.broadcast_arrays(np.asarray(kappa, float), np.asarray(loc, float))
+    lo, hi = branch.bracket(kappa, loc, ctx)
+    lo, hi = np.broadcast_to(lo, loc.shape), np.broadcast_to(hi, loc.shape)
+    if x0 is None:
+        x0 = 0.5 * (lo + hi)
+    return newton(lambda x: _residual(branch, x, kappa, loc, ctx), x0, lo, hi,
+                  what=f"{branch.stage} ({branch.slip}): {'t' if branch.slip == 'no-slip' else 'a'}"
+                       f" from the material condition",
+                  inputs={"w": ctx.w, "rs": 1 / ctx.c if ctx.c else np.inf, "a_m": ctx.a_m})
+
+
+def _propagate(branch, x, kappa_r, kappa_c, loc_c, ctx):
+    """One Newton step in complex arithmetic from the real root x: carries d x/d(kappa, loc)."""
+    if x is None:
+        return None
+    r_x = np.imag(_residual(branch, x + 1j * STEP, kappa_r, np.real(loc_c), ctx)) / STEP
+    return x - _residual(branch, x + 0j, kappa_c, loc_c, ctx) / r_x
+
+
+def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, kappa0=None, x0=None):
+    """Solve the state(s) at real locators ``loc``.
+
+    Displacement control: give ``kappa``. Pressure control: give ``d_fix`` and a start ``kappa0``;
+    kappa is then solved from the gap by Newton, its derivative carried exactly through the inner
+    solve of x.
+
+    Returns
+    -------
+    x, kappa : ndarray or None, ndarray
+    """
+    loc = np.asarray(loc, float)
+    if d_fix is None:
+        kappa = np.broadcast_to(np.asarray(kappa, float), loc.shape)
+        return solve_unknown(branch, kappa, loc, ctx, x0), kappa
+    memo = {}
+
+    def gap(kc):
+        kr = np.real(kc)
+        x = solve_unknown(branch, kr, loc, ctx, memo.get("x"))
+        memo["x"] = x
+        xc = _propagate(branch, x, kr, kc, loc + 0j, ctx)
+        return evaluate(branch, xc, kc, loc, ctx)["d"] - d_fix
+
+    k0 = np.broadcast_to(np.asarray(kappa0, float), loc.shape)
+    kappa = newton(gap, k0, what=f"{branch.stage} ({branch.slip}): pressure from the fixed gap",
+                   inputs={"d": d_fix, "w": ctx.w, "a_m": ctx.a_m})
+    x = solve_unknown(branch, kappa, loc, ctx, memo.get("x"))
+    return x, kappa
+
+
+def derivative(branch: Branch, loc, ctx: Context, x, kappa, *, pressure_control: bool) -> dict:
+    """d(observable)/d(locator) along the branch at solved states, by one complex step.
+
+    Under displacement control kappa is fixed; under pressure control the 2x2 system
+    (material condition, gap condition) is linearised with its exact Jacobian.
+    """
+    loc = np.asarray(loc, float)
+    lc = loc + 1j * STEP
+    if not pressure_control:
+        xc = _propagate(branch, x, kappa, kappa + 0j, lc, ctx)
+        out = evaluate(branch, xc, kappa + 0j, lc, ctx)
+        return {k: np.imag(v) / STEP for k, v in out.items() if k != "ok"}
+    d0 = np.real(evaluate(branch, x, kappa, loc, ctx)["d"])
+
+    def F(xx, kk, ll):
+        e = evaluate(branch, xx, kk, ll, ctx)
+        g = e["d"] - d0
+        return (e["J0"] - branch.target(ll, ctx) if branch.target else None), g
+
+    kr = np.asarray(kappa, float)
+    if x is None:
+        gk = np.imag(F(None, kr + 1j * STEP, loc)[1]) / STEP
+        gl = np.imag(F(None, kr + 0j, lc)[1]) / STEP
+        kc = kr - 1j * STEP * gl / gk
+        out = evaluate(branch, None, kc, lc, ctx)
+        return {k: np.imag(v) / STEP for k, v in out.items() if k != "ok"}
+    Rx, Gx = (np.imag(v) / STEP for v in F(x + 1j * STEP, kr + 0j, loc))
+    Rk, Gk = (np.imag(v) / STEP for v in F(x + 0j, kr + 1j * STEP, loc))
+    Rl, Gl = (np.imag(v) / STEP for v in F(x + 0j, kr + 0j, lc))
+    det = Rx * Gk - Rk * Gx
+    dx = -(Rl * Gk - Rk * Gl) / det
+    dk = -(Rx * Gl - Rl * Gx) / det
+    out = evaluate(branch, x + 1j * STEP * dx, kr + 1j * STEP * dk, lc, ctx)
+    return {k: np.imag(v) / STEP for k, v in out.items() if k != "ok"}
+
+
+def check_ok(state: dict, what: str, inputs: dict) -> None:
+    """Raise ConvergenceError when a solved state is outside the model or not finite."""
+    bad = ~np.asarray(state["ok"], bool)
+    for k in ("a", "alpha", "p", "d", "f", "G"):
+        bad |= ~np.isfinite(np.real(state[k]))
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise ConvergenceError(f"{what}: state outside the model's domain (free membrane past "
+                               f"vertical at the clamp, or no real solution)",
+                               {**inputs, "index": i})
