@@ -1,0 +1,439 @@
+"""Loading histories: displacement control (fixed p) and pressure control (fixed gap d).
+
+A history runs making contact (a from 0 to a_max), contact pinning (alpha from 0 to the onset of
+delamination, G = w) and delamination (a from the onset down to 1e-3 a_max, toward complete
+detachment). Rows are placed per stage, clustered at the stage boundaries; the onset, the most
+negative force and the turning point of the control variable are solved for (root of the exact
+derivative along the branch), not picked from rows, and inserted as rows.
+
+Everything here is dimensionless (DESIGN.md A1); no pandas.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .core import delamination
+from .core.branches import BRANCHES, Context, check_ok, derivative, evaluate, solve_state
+from .core.inflation import apex_deflection, critical_pressure
+from .core.solve import newton
+from .errors import ConvergenceError, InputError
+from .params import A_MAX_OVER_RS, DIMENSIONLESS, check_scene
+
+__all__ = ["History", "history", "state_at", "STAGES", "COLUMNS"]
+
+STAGES = ("making_contact", "pinning", "delamination")
+COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
+#: where the history stops on the way to detachment (a -> 0 is singular), relative to a_max
+A_END = 1e-3
+_KEYS = ("a", "alpha", "p", "d", "f", "G")
+
+
+@dataclass(frozen=True)
+class History:
+    """A dimensionless loading history.
+
+    Attributes
+    ----------
+    columns : dict of str -> ndarray
+        ``stage`` (str array) and ``a, alpha, p, d, delta, f, G`` (float; ``delta`` NaN where
+        |p| > 1) and ``stable`` (bool), in history order.
+    summary : dict
+        ``f_max``, ``onset``, ``f_min``, ``turning_point`` (DESIGN.md A2 ``--json``).
+    inputs : dict
+        The validated inputs, with the resolved ``a_max``.
+    """
+
+    columns: dict
+    summary: dict
+    inputs: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------------------------
+# setup
+
+
+def _prepare(control, slip, p, d, w, rs, a_max, delta_max, p_max, lambda0, points):
+    v = check_scene(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max,
+                    p_max=p_max, lambda0=lambda0, points=points)
+    c = 0.0 if math.isinf(v["rs"]) else 1.0 / v["rs"]
+    pc = control == "pressure"
+    v["a_max"] = _loading_end(v, c, pc)
+    return v, c, pc
+
+
+def _a_cap(c):
+    """Largest admissible a_max: the table's bound and 0.95 rs."""
+    cap = DIMENSIONLESS["a_max"].upper
+    return min(cap, A_MAX_OVER_RS / c) if c > 0 else cap
+
+
+def _loading_end(v, c, pc):
+    """Resolve a_max from delta_max or p_max when those end the loading (1-D solves in a)."""
+    if "a_max" in v:
+        return v["a_max"]
+    mc = BRANCHES[("making_contact", "no-slip")]
+    ctx = Context(c, v["w"])
+    cap = _a_cap(c)
+    if pc:
+        kappa, name, target = v["p_max"], "p_max", v["d"]
+        p_cr = float(critical_pressure(v["d"]))
+        if kappa <= p_cr:
+            raise InputError("p_max", kappa, f"above the critical pressure p_cr = {p_cr:.6g} "
+                             f"at which contact starts for d = {v['d']:g}")
+
+        def resid(a):
+            return evaluate(mc, None, kappa, a, ctx)["d"] - target
+    else:
+        kappa, name = v["p"], "delta_max"
+        d0 = float(apex_deflection(kappa))
+        target = d0 - v["delta_max"]
+
+        def resid(a):
+            return evaluate(mc, None, kappa, a, ctx)["d"] - target
+    r_cap = float(np.real(resid(np.array([cap]))[0]))
+    if not np.isfinite(r_cap) or r_cap > 0:
+        reach = d0 - (r_cap + target) if not pc else None
+        valid = (f"a number in (0, {reach:.6g}] (the displacement at a_max = {cap:g})"
+                 if (not pc and np.isfinite(r_cap)) else
+                 f"reachable with a contact radius below {cap:g}")
+        raise InputError(name, v[name], valid)
+    a = newton(resid, np.array([0.5 * cap]), np.array([1e-9 * cap]), np.array([cap]),
+               what=f"contact radius for {name}", inputs={name: v[name]})
+    return float(a[0])
+
+
+def _ctx_after_loading(v, c, pc):
+    """Solve the end of loading: (Context with a_m, L_m; kappa_m)."""
+    ctx0 = Context(c, v["w"])
+    mc = BRANCHES[("making_contact", v.get("slip", "no-slip"))]
+    a = np.array([v["a_max"]])
+    kappa = _mc_pressure(a, v, c) if pc else np.array([v["p"]])
+    e = evaluate(mc, None, kappa, a, ctx0)
+    check_ok(e, "end of loading", {"a_max": v["a_max"]})
+    return Context(c, v["w"], v["a_max"], float(e["J0"][0])), float(kappa[0])
+
+
+def _mc_pressure(a, v, c):
+    """Pressure control, making contact: kappa with d(kappa, a) = d_fix, bracketed (d grows with kappa).
+
+    Upper end: the clamp tangent turns vertical, sin(theta(1)) = kappa(1 - a^2) - c a^2 = 1 (Case I).
+    """
+    d_fix = v["d"]
+    lo = np.full(a.shape, float(critical_pressure(d_fix)))
+    hi = (1.0 + c * a * a) / (1.0 - a * a) * (1 - 1e-12)
+    mc = BRANCHES[("making_contact", "no-slip")]
+    ctx = Context(c, v["w"])
+    try:
+        return newton(lambda k: evaluate(mc, None, k, a, ctx)["d"] - d_fix, 0.5 * (lo + hi), lo, hi,
+                      what="making contact: pressure from the fixed gap", inputs={"d": d_fix})
+    except ConvergenceError as err:
+        raise InputError("a_max", v["a_max"], "reachable under pressure control at this gap",
+                         "The membrane cannot reach this contact radius with a Case I shape "
+                         "(its tangent would turn past vertical at the clamp).") from err
+
+
+# ----------------------------------------------------------------------------------------------
+# grids
+
+
+def _cluster(n):
+    """n points on [0, 1] clustered at both ends (cosine spacing)."""
+    return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
+
+
+def _split(points):
+    n_mc = max(4, round(0.3 * points))
+    n_pin = max(4, round(0.2 * points))
+    return n_mc, n_pin, max(5, points - n_mc - n_pin + 2)
+
+
+# ----------------------------------------------------------------------------------------------
+# solving rows on a branch
+
+
+def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None):
+    """Solve many states of one branch at once; on failure fall back to sequential continuation."""
+    try:
+        return solve_state(branch, locs, ctx, kappa=None if pc else kappa, d_fix=d_fix if pc else None,
+                           kappa0=kappa_guess, x0=x_guess)
+    except ConvergenceError:
+        if locs.size == 1:
+            raise
+    # sequential continuation: each state starts from its predecessor
+    xs, ks = np.empty(locs.shape), np.empty(locs.shape)
+    k_prev = np.atleast_1d(kappa_guess)[0] if pc else kappa
+    x_prev = None
+    for i, loc in enumerate(locs):
+        x, k = solve_state(branch, np.array([loc]), ctx, kappa=None if pc else kappa,
+                           d_fix=d_fix if pc else None, kappa0=np.array([k_prev]), x0=x_prev)
+        xs[i] = np.nan if x is None else x[0]
+        ks[i] = k[0]
+        k_prev, x_prev = k[0], x
+    return (None if branch.target is None else xs), ks
+
+
+def _onset(slip, ctx, pc, kappa_m, d_fix):
+    """State where G first reaches w: no-slip delamination at a = a_m; frictionless pinning at alpha_w."""
+    if slip == "no-slip":
+        branch, loc = BRANCHES[("delamination", "no-slip")], np.array([ctx.a_m])
+    else:
+        branch = BRANCHES[("pinning", "frictionless")]
+        loc = np.array([float(delamination.frictionless_angle(ctx.w))])
+    x, k = _solve_rows(branch, loc, ctx, pc, kappa_m, d_fix, np.array([kappa_m]))
+    return branch, loc, x, k
+
+
+# ----------------------------------------------------------------------------------------------
+# extrema
+
+
+def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, k_guess):
+    """Locator in [lo, hi] where ``key`` (or kappa) is extremal: brentq on its exact derivative."""
+    def solve(loc):
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_guess]))
+        return x, k
+
+    def slope(loc):
+        x, k = solve(loc)
+        return float(derivative(branch, np.array([loc]), ctx, x, k, pressure_control=pc)[key][0])
+
+    s_lo, s_hi = slope(lo), slope(hi)
+    if not (np.isfinite(s_lo) and np.isfinite(s_hi)) or s_lo * s_hi > 0:
+        # monotone on this interval: the extremum is at an end
+        v_lo, v_hi = (np.real(evaluate(branch, *solve(z), np.array([z]), ctx)[key][0]) for z in (lo, hi))
+        return lo if sign * v_lo <= sign * v_hi else hi
+    return brentq(slope, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+
+
+# ----------------------------------------------------------------------------------------------
+# public
+
+
+def history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
+            rs: float, a_max: float | None = None, delta_max: float | None = None,
+            p_max: float | None = None, lambda0: float = 2.0, points: int = 200) -> History:
+    """Compute a full dimensionless history (DESIGN.md A2).
+
+    Parameters
+    ----------
+    control : {"displacement", "pressure"}
+        Displacement control at fixed pressure ``p``, or pressure control at fixed gap ``d``.
+    slip : {"no-slip", "frictionless"}
+        Interface condition during pinning and delamination.
+    p, d : float
+        Fixed pressure P b/(2 mu h) (displacement control) or fixed gap d/b (pressure control).
+    w : float
+        W_ad/(mu h), > 0.
+    rs : float
+        R_s/b, ``inf`` for a flat substrate.
+    a_max, delta_max, p_max : float
+        Exactly one loading end: contact radius, displacement (displacement control) or pressure
+        (pressure control) at the end of loading.
+    lambda0 : float
+        Pre-stretch; it cancels from every observable under the large-stretch approximation and is
+        only validated here.
+    points : int
+        Approximate number of rows.
+
+    Returns
+    -------
+    History
+
+    Raises
+    ------
+    InputError
+        A parameter out of range (the message names it, its value and the valid range).
+    ConvergenceError
+        A state of the history is outside the model (e.g. the free membrane would turn past
+        vertical at the clamp) or a solve failed; carries the inputs.
+    """
+    v, c, pc = _prepare(control, slip, p, d, w, rs, a_max, delta_max, p_max, lambda0, points)
+    v["slip"] = slip
+    d_fix = v.get("d")
+    kappa_dc = v.get("p")
+    n_mc, n_pin, n_del = _split(v["points"])
+    ctx, kappa_m = _ctx_after_loading(v, c, pc)
+    info = {"control": control, "slip": slip, **{k: v[k] for k in v if k != "slip"}}
+
+    # 1. making contact, a in (0, a_m]; a = 0 is free inflation
+    mc = BRANCHES[("making_contact", slip)]
+    a_mc = ctx.a_m * _cluster(n_mc)[1:]
+    k_mc = _mc_pressure(a_mc, v, c) if pc else np.full(a_mc.shape, kappa_dc)
+    s_mc = evaluate(mc, None, k_mc, a_mc, ctx)
+    check_ok(s_mc, "making contact", info)
+    p0 = float(critical_pressure(d_fix)) if pc else kappa_dc
+    free = {"a": 0.0, "alpha": 0.0, "p": p0, "d": d_fix if pc else float(apex_deflection(p0)),
+            "f": 0.0, "G": 0.0}
+
+    # 2. onset of delamination
+    on_branch, on_loc, on_x, on_k = _onset(slip, ctx, pc, kappa_m, d_fix)
+    onset = evaluate(on_branch, on_x, on_k, on_loc, ctx)
+    check_ok(onset, "onset of delamination", info)
+    alpha_on, a_on, k_on = (float(np.real(onset[k][0])) for k in ("alpha", "a", "p"))
+
+    # 3. pinning, alpha in (0, alpha_on]: predictors interpolate the two ends
+    pin = BRANCHES[("pinning", slip)]
+    al = alpha_on * _cluster(n_pin)[1:]
+    s = al / alpha_on if alpha_on > 0 else al
+    x_guess = None
+    if slip == "frictionless":
+        x_guess = ctx.a_m + (a_on - ctx.a_m) * s
+    k_guess = kappa_m + (k_on - kappa_m) * s
+    x_pin, k_pin = _solve_rows(pin, al, ctx, pc, kappa_dc, d_fix, k_guess, x_guess)
+    s_pin = evaluate(pin, x_pin, k_pin, al, ctx)
+    check_ok(s_pin, "pinning", info)
+
+    # 4. delamination, a from a_on down to A_END a_m (denser toward detachment)
+    dl = BRANCHES[("delamination", slip)]
+    a_end = A_END * ctx.a_m
+    u = _cluster(n_del)[1:]
+    a_dl = a_end + (a_on - a_end) * (1.0 - u) ** 1.5
+    p_cr = float(critical_pressure(d_fix)) if pc else 0.0
+    k_guess = p_cr + (k_on - p_cr) * (a_dl / a_on) ** 2
+    x_dl, k_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess)
+    s_dl = evaluate(dl, x_dl, k_dl, a_dl, ctx)
+    check_ok(s_dl, "delamination", info)
+
+    stages = {"pinning": (pin, al, s_pin), "delamination": (dl, a_dl, s_dl)}
+    extra = _extrema(stages, ctx, pc, kappa_dc, d_fix, onset)
+    cols = _assemble(free, s_mc, s_pin, s_dl, extra, pc, d_fix)
+    summary = _summary(cols, s_mc, onset, extra, pc, d_fix)
+    return History(cols, summary, info)
+
+
+def _real(state, i=None):
+    return {k: float(np.real(state[k] if i is None else state[k][i])) for k in _KEYS}
+
+
+def _extrema(stages, ctx, pc, kappa, d_fix, onset):
+    """Refine the turning point (extremum of the control variable) and the force minimum.
+
+    Returns a dict name -> (stage, locator, state dict).
+    """
+    out = {}
+    # concatenated retraction path: onset is the last pinning row / first delamination row
+    path = []
+    for stage in ("pinning", "delamination"):
+        branch, locs, st = stages[stage]
+        for i in range(locs.size):
+            path.append((stage, i))
+    for name, key, sign in (("turning_point", "p" if pc else "d", -1.0 if pc else 1.0),
+                            ("f_min", "f", -1.0)):
+        vals = np.array([sign * np.real(stages[s][2][key][i]) for s, i in path])
+        j = int(np.argmax(vals))
+        stage, i = path[j]
+        branch, locs, st = stages[stage]
+        # the extremum lies between the neighbours of the best row on its own branch
+        lo = locs[i - 1] if i > 0 else (0.0 if stage == "pinning" else float(np.real(onset["a"][0])))
+        hi = locs[i + 1] if i + 1 < locs.size else locs[i]
+        k_here = float(np.real(st["p"][i]))
+        loc = _extremum(branch, min(lo, hi), max(lo, hi), ctx, pc, kappa, d_fix, key,
+                        sign, k_here) if lo != hi else locs[i]
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_here]))
+        state = _real(evaluate(branch, x, k, np.array([loc]), ctx), 0)
+        out[name] = (stage, float(loc), state)
+    return out
+
+
+def _assemble(free, s_mc, s_pin, s_dl, extra, pc, d_fix):
+    rows = [("making_contact", 0.0, free)]
+    rows += [("making_contact", float(np.real(s_mc["a"][i])), _real(s_mc, i)) for i in range(s_mc["a"].size)]
+    rows += [("pinning", float(np.real(s_pin["alpha"][i])), _real(s_pin, i)) for i in range(s_pin["a"].size)]
+    rows += [("delamination", float(np.real(s_dl["a"][i])), _real(s_dl, i)) for i in range(s_dl["a"].size)]
+    # insert the solved extrema where they belong (alpha ascending in pinning, a descending after)
+    for name, (stage, loc, state) in extra.items():
+        pos = next((j for j, (st, lc, _) in enumerate(rows) if st == stage and
+                    (lc >= loc if stage == "pinning" else lc <= loc)), len(rows))
+        if pos < len(rows) and rows[pos][0] == stage and abs(rows[pos][1] - loc) <= 1e-14:
+            continue  # already a row
+        rows.insert(pos, (stage, loc, state))
+    n = len(rows)
+    cols = {k: np.array([r[2][k] for r in rows], dtype=float) for k in _KEYS}
+    cols["stage"] = np.array([r[0] for r in rows], dtype=object)
+    if pc:
+        cols["d"] = np.full(n, d_fix, dtype=float)  # exact by construction
+    cols["delta"] = apex_deflection(cols["p"]) - cols["d"]
+    tp = extra["turning_point"][2]
+    idx = [j for j in range(n) if rows[j][2] is tp]
+    j_tp = idx[0] if idx else _match(rows, extra["turning_point"])
+    cols["stable"] = np.arange(n) <= j_tp
+    return cols
+
+
+def _match(rows, ext):
+    stage, loc, _ = ext
+    return min(range(len(rows)), key=lambda j: (rows[j][0] != stage, abs(rows[j][1] - loc)))
+
+
+def _point(state, pc, d_fix):
+    p = state["p"]
+    d = d_fix if pc else state["d"]
+    delta = float(apex_deflection(p)) - d if abs(p) <= 1 else None
+    return {"f": state["f"], "delta": delta, "p": p, "a": state["a"]}
+
+
+def _summary(cols, s_mc, onset, extra, pc, d_fix):
+    return {"f_max": float(np.real(s_mc["f"][-1])),
+            "onset": _point(_real(onset, 0), pc, d_fix),
+            "f_min": _point(extra["f_min"][2], pc, d_fix),
+            "turning_point": _point(extra["turning_point"][2], pc, d_fix)}
+
+
+def state_at(control: str, slip: str, stage: str, *, p: float | None = None, d: float | None = None,
+             w: float, rs: float, a_max: float, a: float | None = None,
+             alpha: float | None = None) -> dict:
+    """One state of a history, at a given locator (for tests and reference comparisons).
+
+    Parameters
+    ----------
+    stage : {"making_contact", "pinning", "delamination"}
+        Making contact and delamination take the contact radius ``a``; pinning takes the contact
+        angle ``alpha`` (0 <= alpha <= alpha at onset).
+    Other parameters as :func:`history`.
+
+    Returns
+    -------
+    dict
+        ``a, alpha, p, d, delta, f, G`` as floats (``delta`` NaN where |p| > 1).
+    """
+    if stage not in STAGES:
+        raise InputError("stage", stage, f"one of {', '.join(STAGES)}")
+    v, c, pc = _prepare(control, slip, p, d, w, rs, a_max, None, None, 2.0, 200)
+    v["slip"] = slip
+    d_fix, kappa = v.get("d"), v.get("p")
+    locator = "alpha" if stage == "pinning" else "a"
+    loc = alpha if stage == "pinning" else a
+    if loc is None or not np.isfinite(loc):
+        raise InputError(locator, loc, f"a number (the locator of stage '{stage}')")
+    branch = BRANCHES[(stage, slip)]
+    if stage == "making_contact":
+        ctx = Context(c, v["w"], v["a_max"], np.nan)
+        k = _mc_pressure(np.array([loc]), v, c) if pc else np.array([kappa])
+        st = evaluate(branch, None, k, np.array([loc]), ctx)
+    else:
+        ctx, kappa_m = _ctx_after_loading(v, c, pc)
+        ob, ol, ox, okp = _onset(slip, ctx, pc, kappa_m, d_fix)
+        on = evaluate(ob, ox, okp, ol, ctx)
+        k_on = float(np.real(on["p"][0]))
+        if stage == "pinning":
+            frac = loc / float(np.real(on["alpha"][0]))
+            kg = kappa_m + (k_on - kappa_m) * frac
+            xg = None
+            if slip == "frictionless":
+                xg = np.array([ctx.a_m + (float(np.real(on["a"][0])) - ctx.a_m) * frac])
+        else:
+            p_cr = float(critical_pressure(d_fix)) if pc else 0.0
+            kg = p_cr + (k_on - p_cr) * (loc / float(np.real(on["a"][0]))) ** 2
+            xg = None
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([kg]), xg)
+        st = evaluate(branch, x, k, np.array([loc]), ctx)
+    check_ok(st, stage, {"control": control, "slip": slip, locator: loc})
+    out = _real(st, 0)
+    if pc:
+        out["d"] = d_fix
+    out["delta"] = float(apex_deflection(out["p"])) - out["d"] if abs(out["p"]) <= 1 else float("nan")
+    return out
