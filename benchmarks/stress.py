@@ -1,0 +1,370 @@
+"""Domain-wide stress run of ``adhfit.simulate`` on random valid scenes (issue 2, item 7c).
+
+Draws scenes from the parameter table (``adhfit.params.DIMENSIONLESS`` bounds, ``check_scene`` for the
+cross constraints) with an explicitly seeded ``numpy.random.Generator``, runs each one with
+``points=50`` in one of two worker processes under a per-scene timeout, and counts
+
+    success | input_error | convergence_error | other_exception | nan_in_output | invariant_violation
+    | timeout
+
+``nan_in_output``: a NaN/inf in the frame (``delta`` may be empty only where |p| > 1, A2) or in the
+summary.  ``invariant_violation``: finite output that breaks a contract every history must meet (stage
+order, 0 <= G <= w, ``stable`` true then false, ``f_max`` = force at the end of loading, ``f_min`` <=
+every row's f).  A hung scene is killed and counted as ``timeout``, not fatal.
+
+Usage::
+
+    python benchmarks/stress.py --n 10000 --seed 20240601 [--timeout 60] [--workers 2]
+
+Writes ``benchmarks/results/stress.json`` (counts, timing, the first 50 failing inputs of each kind)
+and ``benchmarks/results/stress.md``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import multiprocessing as mp
+import os
+import platform
+import sys
+import time
+import traceback
+from collections import Counter
+from multiprocessing.connection import wait
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from adhfit.errors import InputError  # noqa: E402
+from adhfit.params import DIMENSIONLESS as T, check_scene  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results"
+KINDS = ("success", "input_error", "convergence_error", "other_exception", "nan_in_output",
+         "invariant_violation", "timeout")
+KEEP = 50
+POINTS = 50
+
+
+# --------------------------------------------------------------------------------------------------
+# drawing scenes from the parameter table
+# --------------------------------------------------------------------------------------------------
+def _inside(rng: np.random.Generator, name: str, lo: float | None = None, hi: float | None = None,
+            log: bool = False) -> float:
+    """A value strictly inside the table's bounds for ``name`` (narrowed by lo/hi), uniform or log."""
+    row = T[name]
+    lo = row.lower if lo is None else max(lo, row.lower)
+    hi = row.upper if hi is None else min(hi, row.upper)
+    for _ in range(100):
+        x = float(math.exp(rng.uniform(math.log(lo), math.log(hi)))) if log else float(rng.uniform(lo, hi))
+        if row.contains(x):
+            return x
+    raise RuntimeError(f"cannot draw {name} inside ({lo}, {hi})")
+
+
+def _draw_rs(rng: np.random.Generator) -> float:
+    if rng.random() < 0.2:
+        return math.inf
+    return _inside(rng, "rs", hi=100.0, log=True)
+
+
+def _draw_end(rng: np.random.Generator, control: str, rs: float, other_ends: float) -> dict:
+    if rng.random() < other_ends:
+        if control == "displacement":
+            return {"delta_max": _inside(rng, "delta_max", log=rng.random() < 0.5, lo=1e-4)}
+        return {"p_max": _inside(rng, "p_max")}
+    hi = min(T["a_max"].upper, 0.95 * rs)
+    return {"a_max": _inside(rng, "a_max", lo=1e-3 * hi, hi=hi, log=rng.random() < 0.3)}
+
+
+def draw_scene(rng: np.random.Generator, other_ends: float = 0.1) -> dict:
+    """One random scene that ``check_scene`` accepts (rejection sampling over the whole table domain).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness (seeded by the caller).
+    other_ends : float
+        Fraction of scenes whose loading end is ``delta_max``/``p_max`` instead of ``a_max``.
+
+    Returns
+    -------
+    dict
+        Keyword arguments for ``adhfit.simulate`` (without ``points``).
+    """
+    for _ in range(1000):
+        control = str(rng.choice(["displacement", "pressure"]))
+        scene = {"control": control, "slip": str(rng.choice(["no-slip", "frictionless"]))}
+        scene["p" if control == "displacement" else "d"] = _inside(rng, "p" if control == "displacement" else "d")
+        scene["w"] = _inside(rng, "w", lo=1e-4, log=rng.random() < 0.5)
+        scene["rs"] = _draw_rs(rng)
+        scene.update(_draw_end(rng, control, scene["rs"], other_ends))
+        scene["lambda0"] = 2.0 if rng.random() < 0.5 else _inside(rng, "lambda0", hi=20.0, log=True)
+        try:
+            check_scene(control, scene["slip"], p=scene.get("p"), d=scene.get("d"), w=scene["w"],
+                        rs=scene["rs"], a_max=scene.get("a_max"), delta_max=scene.get("delta_max"),
+                        p_max=scene.get("p_max"), lambda0=scene["lambda0"], points=POINTS)
+        except InputError:
+            continue
+        return scene
+    raise RuntimeError("rejection sampling found no valid scene in 1000 draws")
+
+
+# --------------------------------------------------------------------------------------------------
+# classifying one run
+# --------------------------------------------------------------------------------------------------
+def _nonfinite(frame) -> list[str]:
+    bad = []
+    for col in ("a", "alpha", "p", "d", "f", "G"):
+        v = frame[col].to_numpy(dtype=float)
+        if not np.all(np.isfinite(v)):
+            bad.append(f"{col}: {int(np.sum(~np.isfinite(v)))} non-finite")
+    delta = frame["delta"].to_numpy(dtype=float)
+    p = frame["p"].to_numpy(dtype=float)
+    must = np.abs(p) <= 1.0
+    if not np.all(np.isfinite(delta[must])):
+        bad.append(f"delta: {int(np.sum(~np.isfinite(delta[must])))} non-finite where |p| <= 1")
+    return bad
+
+
+def _summary_nonfinite(summary: dict, prefix: str = "") -> list[str]:
+    bad = []
+    for k, v in summary.items():
+        if isinstance(v, dict):
+            bad += _summary_nonfinite(v, prefix + k + ".")
+        elif v is None:
+            if not (k == "delta"):   # delta may be empty where |p| > 1
+                bad.append(prefix + k + " is None")
+        elif isinstance(v, (int, float)) and not math.isfinite(v):
+            bad.append(f"{prefix}{k} = {v}")
+    return bad
+
+
+def _invariants(frame, summary: dict, w: float) -> list[str]:
+    bad = []
+    order = {"making_contact": 0, "pinning": 1, "delamination": 2}
+    st = [order.get(s, -1) for s in frame["stage"]]
+    if min(st) < 0 or any(b < a for a, b in zip(st, st[1:])):
+        bad.append("stage labels missing or out of order")
+    g = frame["G"].to_numpy(dtype=float)
+    if g.min() < -1e-12 or g.max() > w * (1 + 1e-6) + 1e-12:
+        bad.append(f"G outside [0, w]: min {g.min():.3g}, max {g.max():.6g}, w {w:.6g}")
+    stable = [bool(s) for s in frame["stable"]]
+    if any(b and not a for a, b in zip(stable, stable[1:])):
+        bad.append("stable goes false then true again")
+    f = frame["f"].to_numpy(dtype=float)
+    mk = np.flatnonzero(frame["stage"].to_numpy() == "making_contact")
+    fmax = summary.get("f_max")
+    if mk.size and isinstance(fmax, float) and abs(fmax - f[mk[-1]]) > 1e-9 * max(1.0, abs(fmax)):
+        bad.append(f"f_max {fmax!r} != f at end of loading {f[mk[-1]]!r}")
+    fmin = (summary.get("f_min") or {}).get("f")
+    if isinstance(fmin, float) and fmin > f.min() + 1e-9 * max(1.0, abs(fmin)):
+        bad.append(f"f_min {fmin!r} above the least row force {f.min()!r}")
+    return bad
+
+
+def run_one(scene: dict) -> dict:
+    """Run one scene; return its kind, wall time and details (worker side)."""
+    import adhfit
+    from adhfit.errors import ConvergenceError, InputError
+
+    t0 = time.perf_counter()
+    try:
+        res = adhfit.simulate(**scene, points=POINTS)
+    except InputError as e:
+        return _outcome("input_error", t0, str(e))
+    except ConvergenceError as e:
+        return _outcome("convergence_error", t0, str(e))
+    except Exception as e:  # noqa: BLE001 - the point is to catch what the engine did not mean to raise
+        tb = traceback.extract_tb(e.__traceback__)[-1]
+        return _outcome("other_exception", t0, f"{type(e).__name__}: {e} [{tb.filename}:{tb.lineno}]")
+    elapsed = time.perf_counter() - t0
+    frame, summary = res.frame, res.summary
+    bad = _nonfinite(frame) + _summary_nonfinite(summary)
+    if bad:
+        return {"kind": "nan_in_output", "time": elapsed, "detail": "; ".join(bad), "rows": len(frame)}
+    bad = _invariants(frame, summary, scene["w"])
+    if bad:
+        return {"kind": "invariant_violation", "time": elapsed, "detail": "; ".join(bad), "rows": len(frame)}
+    return {"kind": "success", "time": elapsed, "rows": len(frame)}
+
+
+def _outcome(kind: str, t0: float, detail: str) -> dict:
+    return {"kind": kind, "time": time.perf_counter() - t0, "detail": detail[:500]}
+
+
+# --------------------------------------------------------------------------------------------------
+# two workers with a per-scene timeout (a hang is killed and counted, not fatal)
+# --------------------------------------------------------------------------------------------------
+def _worker(conn) -> None:
+    while True:
+        msg = conn.recv()
+        if msg is None:
+            return
+        idx, scene = msg
+        conn.send((idx, run_one(scene)))
+
+
+class _Slot:
+    """One worker process, its pipe, and the scene it is running."""
+
+    def __init__(self, ctx) -> None:
+        self.ctx = ctx
+        self.start()
+
+    def start(self) -> None:
+        self.conn, child = self.ctx.Pipe()
+        self.proc = self.ctx.Process(target=_worker, args=(child,), daemon=True)
+        self.proc.start()
+        child.close()
+        self.task: int | None = None
+        self.t0 = 0.0
+
+    def submit(self, idx: int, scene: dict) -> None:
+        self.task, self.t0 = idx, time.perf_counter()
+        self.conn.send((idx, scene))
+
+    def kill(self) -> None:
+        self.proc.kill()          # only this worker, by its own handle
+        self.proc.join()
+        self.conn.close()
+
+
+def run_all(scenes: list[dict], workers: int, timeout: float, progress: bool = True) -> list[dict]:
+    """Outcome of every scene, in order."""
+    ctx = mp.get_context("fork")
+    slots = [_Slot(ctx) for _ in range(workers)]
+    out: list[dict | None] = [None] * len(scenes)
+    todo = list(range(len(scenes)))[::-1]
+    done, t_start = 0, time.perf_counter()
+    while done < len(scenes):
+        for s in slots:
+            if s.task is None and todo:
+                i = todo.pop()
+                s.submit(i, scenes[i])
+        busy = {s.conn: s for s in slots if s.task is not None}
+        for conn in wait(list(busy), timeout=0.2):
+            s = busy[conn]
+            try:
+                idx, res = conn.recv()
+            except EOFError:      # the worker died (segfault, OOM): count it, restart it
+                idx, res = s.task, {"kind": "other_exception", "time": time.perf_counter() - s.t0,
+                                    "detail": f"worker died (exit code {s.proc.exitcode})"}
+                s.kill()
+                s.start()
+            out[idx], s.task = res, None
+            done += 1
+        now = time.perf_counter()
+        for s in slots:
+            if s.task is not None and now - s.t0 > timeout:
+                out[s.task] = {"kind": "timeout", "time": now - s.t0, "detail": f"killed after {timeout:g} s"}
+                done += 1
+                s.kill()
+                s.start()
+        if progress and done and done % 500 == 0:
+            print(f"  {done}/{len(scenes)} scenes, {now - t_start:.0f} s", file=sys.stderr, flush=True)
+    for s in slots:
+        s.conn.send(None)
+        s.proc.join(timeout=5)
+        if s.proc.is_alive():
+            s.kill()
+    return out  # type: ignore[return-value]
+
+
+# --------------------------------------------------------------------------------------------------
+# report
+# --------------------------------------------------------------------------------------------------
+def _jsonable(scene: dict) -> dict:
+    return {k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in scene.items()}
+
+
+def summarize(scenes: list[dict], outcomes: list[dict], args: argparse.Namespace, wall: float) -> dict:
+    counts = Counter(o["kind"] for o in outcomes)
+    times = np.array([o["time"] for o in outcomes if o["kind"] != "timeout"])
+    by_group: dict[str, Counter] = {}
+    for sc, o in zip(scenes, outcomes):
+        end = next(k for k in ("a_max", "delta_max", "p_max") if k in sc)
+        flat = "flat" if math.isinf(sc["rs"]) else "curved"
+        key = f"{sc['control']} / {sc['slip']} / {flat} / {end}"
+        by_group.setdefault(key, Counter())[o["kind"]] += 1
+    failures: dict[str, list] = {k: [] for k in KINDS if k != "success"}
+    for i, (sc, o) in enumerate(zip(scenes, outcomes)):
+        if o["kind"] != "success" and len(failures[o["kind"]]) < KEEP:
+            failures[o["kind"]].append({"index": i, "scene": _jsonable(sc), "detail": o.get("detail"),
+                                        "time_s": round(o["time"], 4)})
+    return {
+        "command": " ".join([Path(sys.executable).name] + sys.argv),
+        "n": len(scenes), "seed": args.seed, "points": POINTS, "timeout_s": args.timeout,
+        "workers": args.workers, "other_ends_fraction": args.other_ends, "wall_s": round(wall, 1),
+        "machine": machine_info(),
+        "counts": {k: counts.get(k, 0) for k in KINDS},
+        "time_per_scene_s": {"median": float(np.median(times)), "p95": float(np.percentile(times, 95)),
+                             "max": float(times.max()), "mean": float(times.mean())},
+        "by_group": {k: dict(v) for k, v in sorted(by_group.items())},
+        "failures": failures,
+    }
+
+
+def machine_info() -> dict:
+    import numpy
+    import scipy
+    return {"python": platform.python_version(), "numpy": numpy.__version__, "scipy": scipy.__version__,
+            "nproc": os.cpu_count(), "platform": platform.platform()}
+
+
+def write_markdown(rep: dict, path: Path) -> None:
+    t = rep["time_per_scene_s"]
+    lines = [
+        "# Stress run: random valid scenes through `adhfit.simulate`", "",
+        f"Command: `{rep['command']}`  ",
+        f"{rep['n']} scenes, seed {rep['seed']}, points={rep['points']}, {rep['workers']} workers, "
+        f"timeout {rep['timeout_s']:g} s per scene, wall {rep['wall_s']:g} s.  ",
+        "Machine: " + ", ".join(f"{k} {v}" for k, v in rep["machine"].items()), "",
+        "| outcome | scenes | share |", "|---|---:|---:|",
+    ]
+    lines += [f"| {k} | {v} | {100 * v / rep['n']:.2f} % |" for k, v in rep["counts"].items()]
+    lines += ["", f"Time per scene: median {1e3 * t['median']:.2f} ms, 95th percentile "
+              f"{1e3 * t['p95']:.2f} ms, max {1e3 * t['max']:.1f} ms, mean {1e3 * t['mean']:.2f} ms.", "",
+              "## By group (control / slip / substrate / loading end)", "",
+              "| group | " + " | ".join(KINDS) + " |", "|---|" + "---:|" * len(KINDS)]
+    for g, c in rep["by_group"].items():
+        lines.append(f"| {g} | " + " | ".join(str(c.get(k, 0)) for k in KINDS) + " |")
+    lines += ["", "## First failing inputs of each kind (all kept ones are in stress.json)", ""]
+    for kind, items in rep["failures"].items():
+        if not items:
+            continue
+        lines.append(f"### {kind} ({rep['counts'][kind]})")
+        lines.append("")
+        for it in items[:5]:
+            lines.append(f"- `{json.dumps(it['scene'])}`: {it['detail']}")
+        lines.append("")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=10_000, help="number of scenes (default 10000)")
+    ap.add_argument("--seed", type=int, default=20240601, help="seed of the numpy Generator")
+    ap.add_argument("--timeout", type=float, default=60.0, help="per-scene timeout in seconds")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--other-ends", type=float, default=0.1,
+                    help="fraction of scenes ending at delta_max/p_max instead of a_max")
+    ap.add_argument("--out", type=Path, default=RESULTS)
+    args = ap.parse_args(argv)
+    rng = np.random.default_rng(args.seed)
+    scenes = [draw_scene(rng, args.other_ends) for _ in range(args.n)]
+    t0 = time.perf_counter()
+    outcomes = run_all(scenes, args.workers, args.timeout)
+    rep = summarize(scenes, outcomes, args, time.perf_counter() - t0)
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "stress.json").write_text(json.dumps(rep, indent=1) + "\n")
+    write_markdown(rep, args.out / "stress.md")
+    print(json.dumps(rep["counts"]), f"median {1e3 * rep['time_per_scene_s']['median']:.2f} ms/scene")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
