@@ -1,0 +1,191 @@
+"""Run time of ``adhfit.simulate`` and of the plain scipy baseline (issue 2, item 7a).
+
+(a) Median (and min) wall time per history of ``adhfit.simulate`` for the 8 combinations
+    control x slip x substrate (the paper's base cases p = 0.6 / d = 0, w = 0.2, rs = 0.5,
+    a_max = 0.25, and a flat-substrate variant rs = inf; pressure control on the flat needs d > 0,
+    so it uses d = 0.2) at points = 50, 200, 1000.
+(b) The headline: the 200-row displacement-control frictionless history, engine against
+    ``benchmarks/baseline_quad.py`` (scipy quad + brentq) on exactly the same rows (the engine frame's
+    locators, fed to the baseline), with the agreement between the two on those rows; plus the
+    engine's no-slip and pressure-control times relative to it and the baseline on the same rows
+    for the other curved-substrate combinations.
+
+Usage::
+
+    python benchmarks/bench_time.py [--repeat 7] [--quick]
+
+Writes ``benchmarks/results/time.md`` and ``benchmarks/results/time.json``.  Timing lives here only,
+never in the tests.  The engine's time includes what ``simulate`` always does (locating the onset,
+the force minimum and the turning point to 1e-8, and building the DataFrame); the baseline only
+computes the rows.
+"""
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import adhfit  # noqa: E402
+import baseline_quad  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results"
+BASE = {"w": 0.2, "a_max": 0.25}
+#: (label, control, slip, keyword arguments)
+CASES = [
+    (f"{control} / {slip} / {sub}", control, slip,
+     {**BASE, "rs": rs, **({"p": 0.6} if control == "displacement" else {"d": d})})
+    for control in ("displacement", "pressure")
+    for slip in ("frictionless", "no-slip")
+    for sub, rs, d in (("rs=0.5", 0.5, 0.0), ("flat", math.inf, 0.2))
+]
+POINTS = (50, 200, 1000)
+HEADLINE = "displacement / frictionless / rs=0.5"
+
+
+def machine_info() -> dict:
+    import pandas
+    import scipy
+    return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "pandas": pandas.__version__, "adhfit": adhfit.__version__, "nproc": os.cpu_count(),
+            "platform": platform.platform(), "processor": platform.processor() or platform.machine()}
+
+
+def timed(fun: Callable[[], object], repeat: int) -> dict:
+    """Median, min and all wall times (s) of ``repeat`` calls after one warm-up call; gc off inside."""
+    fun()
+    times = []
+    for _ in range(repeat):
+        gc.collect()
+        gc.disable()
+        try:
+            t0 = time.perf_counter()
+            fun()
+            times.append(time.perf_counter() - t0)
+        finally:
+            gc.enable()
+    return {"median_s": statistics.median(times), "min_s": min(times), "runs_s": times}
+
+
+def engine_table(repeat: int, points: tuple[int, ...]) -> list[dict]:
+    rows = []
+    for label, control, slip, kw in CASES:
+        for n in points:
+            res = adhfit.simulate(control, slip, points=n, **kw)
+            t = timed(lambda: adhfit.simulate(control, slip, points=n, **kw), repeat)
+            rows.append({"case": label, "points": n, "rows": len(res.frame), **t})
+            print(f"  engine {label:40s} points={n:5d}: median {1e3 * t['median_s']:8.2f} ms", flush=True)
+    return rows
+
+
+def locators(frame) -> dict[str, np.ndarray]:
+    """Per-stage locators of an engine frame: a (making contact, delamination), alpha (pinning)."""
+    st = frame["stage"].to_numpy()
+    return {"making_contact": frame["a"].to_numpy()[st == "making_contact"],
+            "pinning": frame["alpha"].to_numpy()[st == "pinning"],
+            "delamination": frame["a"].to_numpy()[st == "delamination"]}
+
+
+def same_rows(label: str, control: str, slip: str, kw: dict, repeat: int, quad_tol: float,
+              root_tol: float) -> dict:
+    """Engine and baseline on the engine's 200-point rows: times and max differences."""
+    res = adhfit.simulate(control, slip, points=200, **kw)
+    loc = locators(res.frame)
+    kw_b = {k: v for k, v in kw.items()}
+
+    def base() -> dict:
+        return baseline_quad.history(control, slip, locators=loc, quad_tol=quad_tol, root_tol=root_tol,
+                                     **kw_b)
+
+    b = base()
+    fr = res.frame
+    diff = {k: float(np.nanmax(np.abs(b[k] - fr[k].to_numpy(dtype=float)))) for k in ("f", "delta", "p", "a")}
+    t_eng = timed(lambda: adhfit.simulate(control, slip, points=200, **kw), repeat)
+    t_base = timed(base, repeat)
+    out = {"case": label, "rows": len(fr), "quad_tol": quad_tol, "root_tol": root_tol,
+           "engine": t_eng, "baseline": t_base, "ratio_median": t_base["median_s"] / t_eng["median_s"],
+           "max_abs_diff": diff}
+    print(f"  same rows {label:40s}: engine {1e3 * t_eng['median_s']:.2f} ms, baseline "
+          f"{1e3 * t_base['median_s']:.2f} ms, ratio {out['ratio_median']:.1f}, max|df| {diff['f']:.1e}",
+          flush=True)
+    return out
+
+
+def write_markdown(rep: dict, path: Path) -> None:
+    m = rep["machine"]
+    lines = ["# Run time per history", "",
+             f"Command: `{rep['command']}`  ",
+             "Machine: " + ", ".join(f"{k} {v}" for k, v in m.items()) + "  ",
+             f"Each time: median (min) of {rep['repeat']} calls after one warm-up call, garbage collector off "
+             "during a call. Base cases: p = 0.6 (displacement) / d = 0 (pressure; d = 0.2 on the flat, "
+             "where d = 0 is outside the domain), w = 0.2, a_max = 0.25, rs = 0.5 or inf.", "",
+             "## Headline: 200-row displacement-control frictionless history, same rows", ""]
+    h = rep["headline"]
+    lines += [f"- engine `adhfit.simulate`: **{1e3 * h['engine']['median_s']:.2f} ms** median "
+              f"(min {1e3 * h['engine']['min_s']:.2f} ms), {h['rows']} rows",
+              f"- baseline (scipy quad + brentq, quad_tol {h['quad_tol']:g}, root_tol {h['root_tol']:g}): "
+              f"**{1e3 * h['baseline']['median_s']:.2f} ms** median (min {1e3 * h['baseline']['min_s']:.2f} ms)",
+              f"- ratio baseline / engine (medians): **{h['ratio_median']:.1f}x**",
+              f"- agreement on those rows: max |Δf| = {h['max_abs_diff']['f']:.1e}, "
+              f"max |Δδ| = {h['max_abs_diff']['delta']:.1e}", ""]
+    lines += ["The engine's time also covers locating the onset, f_min and the turning point to 1e-8 "
+              "and building the DataFrame; the baseline computes the rows only.", "",
+              "### Other combinations on the engine's 200-point rows", "",
+              "| case | rows | engine median (ms) | engine / headline engine | baseline median (ms) "
+              "| baseline / engine | max abs Δf | max abs Δδ |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    t0 = h["engine"]["median_s"]
+    for s in rep["same_rows"]:
+        lines.append(f"| {s['case']} | {s['rows']} | {1e3 * s['engine']['median_s']:.2f} | "
+                     f"{s['engine']['median_s'] / t0:.2f} | {1e3 * s['baseline']['median_s']:.2f} | "
+                     f"{s['ratio_median']:.1f} | {s['max_abs_diff']['f']:.1e} | {s['max_abs_diff']['delta']:.1e} |")
+    lines += ["", "## Engine: `adhfit.simulate` per history", "",
+              "| case | points | rows | median (ms) | min (ms) | relative to headline (200 pts) |",
+              "|---|---:|---:|---:|---:|---:|"]
+    for r in rep["engine"]:
+        lines.append(f"| {r['case']} | {r['points']} | {r['rows']} | {1e3 * r['median_s']:.2f} | "
+                     f"{1e3 * r['min_s']:.2f} | {r['median_s'] / t0:.2f} |")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=7, help="timed calls per measurement (>= 7 advised)")
+    ap.add_argument("--quick", action="store_true", help="points 50 and 200 only, 3 repeats (a smoke run)")
+    ap.add_argument("--quad-tol", type=float, default=1e-10)
+    ap.add_argument("--root-tol", type=float, default=1e-12)
+    ap.add_argument("--out", type=Path, default=RESULTS)
+    args = ap.parse_args(argv)
+    repeat = 3 if args.quick else args.repeat
+    points = (50, 200) if args.quick else POINTS
+    print("engine table", flush=True)
+    eng = engine_table(repeat, points)
+    print("same rows", flush=True)
+    same = [same_rows(label, c, s, kw, repeat, args.quad_tol, args.root_tol)
+            for label, c, s, kw in CASES if "rs=0.5" in label or label.startswith("displacement")]
+    rep = {"command": " ".join(["python"] + sys.argv), "repeat": repeat, "machine": machine_info(),
+           "headline": next(s for s in same if s["case"] == HEADLINE), "same_rows": same, "engine": eng}
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "time.json").write_text(json.dumps(rep, indent=1) + "\n")
+    write_markdown(rep, args.out / "time.md")
+    h = rep["headline"]
+    print(f"headline: engine {1e3 * h['engine']['median_s']:.2f} ms, baseline "
+          f"{1e3 * h['baseline']['median_s']:.2f} ms, ratio {h['ratio_median']:.1f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
