@@ -201,12 +201,15 @@ def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, k_guess):
         x, k = solve(loc)
         return float(derivative(branch, np.array([loc]), ctx, x, k, pressure_control=pc)[key][0])
 
+    def value(loc):
+        return sign * float(np.real(evaluate(branch, *solve(loc), np.array([loc]), ctx)[key][0]))
+
+    candidates = [lo, hi]
     s_lo, s_hi = slope(lo), slope(hi)
-    if not (np.isfinite(s_lo) and np.isfinite(s_hi)) or s_lo * s_hi > 0:
-        # monotone on this interval: the extremum is at an end
-        v_lo, v_hi = (np.real(evaluate(branch, *solve(z), np.array([z]), ctx)[key][0]) for z in (lo, hi))
-        return lo if sign * v_lo <= sign * v_hi else hi
-    return brentq(slope, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    if np.isfinite(s_lo) and np.isfinite(s_hi) and s_lo * s_hi < 0:
+        candidates.append(brentq(slope, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200))
+    # the extremum of a smooth function on [lo, hi] is a stationary point or an end
+    return max(candidates, key=value)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -340,33 +343,45 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
 
 
 def _assemble(free, s_mc, s_pin, s_dl, extra, pc, d_fix):
-    rows = [("making_contact", 0.0, free)]
-    rows += [("making_contact", float(np.real(s_mc["a"][i])), _real(s_mc, i)) for i in range(s_mc["a"].size)]
-    rows += [("pinning", float(np.real(s_pin["alpha"][i])), _real(s_pin, i)) for i in range(s_pin["a"].size)]
-    rows += [("delamination", float(np.real(s_dl["a"][i])), _real(s_dl, i)) for i in range(s_dl["a"].size)]
-    # insert the solved extrema where they belong (alpha ascending in pinning, a descending after)
-    for name, (stage, loc, state) in extra.items():
-        pos = next((j for j, (st, lc, _) in enumerate(rows) if st == stage and
-                    (lc >= loc if stage == "pinning" else lc <= loc)), len(rows))
-        if pos < len(rows) and rows[pos][0] == stage and abs(rows[pos][1] - loc) <= 1e-14:
-            continue  # already a row
-        rows.insert(pos, (stage, loc, state))
-    n = len(rows)
-    cols = {k: np.array([r[2][k] for r in rows], dtype=float) for k in _KEYS}
-    cols["stage"] = np.array([r[0] for r in rows], dtype=object)
+    """Stack the stages in history order, insert the solved extrema, set ``delta`` and ``stable``."""
+    parts = {k: [np.array([free[k]])] for k in _KEYS}
+    stage, loc = [np.array(["making_contact"], dtype=object)], [np.array([0.0])]
+    for name, st, key in (("making_contact", s_mc, "a"), ("pinning", s_pin, "alpha"),
+                          ("delamination", s_dl, "a")):
+        for k in _KEYS:
+            parts[k].append(np.real(st[k]).astype(float) + 0.0)  # + 0.0 turns -0.0 into 0.0
+        loc.append(np.real(st[key]).astype(float))
+        stage.append(np.full(loc[-1].size, name, dtype=object))
+    cols = {k: np.concatenate(v) for k, v in parts.items()}
+    cols["stage"], locs = np.concatenate(stage), np.concatenate(loc)
+    order = {"making_contact": 0, "pinning": 1, "delamination": 2}
+    # history position: stage rank, then alpha ascending (pinning) or a descending (delamination)
+    keyed = np.array([order[s] for s in cols["stage"]], float)
+    tp_pos = None
+    for name, (stg, lc, state) in sorted(extra.items()):
+        rank = order[stg]
+        sgn = -1.0 if stg == "delamination" else 1.0
+        pos_key = sgn * locs
+        same = keyed == rank
+        # first row of the stage that lies at or beyond the extremum
+        beyond = np.flatnonzero(same & (pos_key >= sgn * lc - 1e-15))
+        j = int(beyond[0]) if beyond.size else int(np.flatnonzero(same)[-1]) + 1
+        if not (j < locs.size and same[j] and abs(locs[j] - lc) <= 1e-14):
+            for k in _KEYS:
+                cols[k] = np.insert(cols[k], j, state[k])
+            cols["stage"] = np.insert(cols["stage"], j, stg)
+            locs, keyed = np.insert(locs, j, lc), np.insert(keyed, j, rank)
+            if tp_pos is not None and j <= tp_pos:
+                tp_pos += 1
+        if name == "turning_point":
+            tp_pos = j
+    n = locs.size
     if pc:
         cols["d"] = np.full(n, d_fix, dtype=float)  # exact by construction
-    cols["delta"] = apex_deflection(cols["p"]) - cols["d"]
-    tp = extra["turning_point"][2]
-    idx = [j for j in range(n) if rows[j][2] is tp]
-    j_tp = idx[0] if idx else _match(rows, extra["turning_point"])
-    cols["stable"] = np.arange(n) <= j_tp
+    with np.errstate(invalid="ignore"):
+        cols["delta"] = apex_deflection(cols["p"]) - cols["d"]
+    cols["stable"] = np.arange(n) <= tp_pos
     return cols
-
-
-def _match(rows, ext):
-    stage, loc, _ = ext
-    return min(range(len(rows)), key=lambda j: (rows[j][0] != stage, abs(rows[j][1] - loc)))
 
 
 def _point(state, pc, d_fix):

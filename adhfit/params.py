@@ -167,18 +167,18 @@ def check_scene(control: str, slip: str, *, p: float | None, d: float | None, w:
         raise InputError("p_max", value, "used with pressure control only; use delta_max or a_max")
     out[end] = T[end].check(value)
 
-    curv = 1.0 / out["rs"]
+    curv = 1.0 / out["rs"] + 0.0  # + 0.0: no "-0" in messages for a flat substrate
     if end == "a_max" and out["a_max"] >= A_MAX_OVER_RS * out["rs"]:
         raise InputError("a_max", out["a_max"], f"below {A_MAX_OVER_RS:g} rs = {A_MAX_OVER_RS * out['rs']:g}",
                          "Contact must stay on the substrate's upper hemisphere.")
     if control == "displacement":
         if out["p"] + curv <= 0.0:
-            raise InputError("p", out["p"], f"a number in ({-curv:g}, 1) for rs = {out['rs']:g}",
+            raise InputError("p", out["p"], f"a number in ({_fmt(0.0 - curv)}, 1) for rs = {out['rs']:g}",
                              "The membrane must be less concave than the substrate (p > -1/rs) "
                              "for contact to start at the apex.")
     else:
         p_cr = 2.0 * out["d"] / (1.0 + out["d"] ** 2)
         if p_cr + curv <= 0.0:
-            raise InputError("d", out["d"], f"such that 2d/(1+d^2) > -1/rs = {-curv:g}",
+            raise InputError("d", out["d"], f"such that 2d/(1+d^2) > -1/rs = {_fmt(0.0 - curv)}",
                              "Contact must start at the substrate apex.")
     return out

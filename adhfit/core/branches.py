@@ -68,7 +68,7 @@ class Branch:
 
 def _mc(x, kappa, loc, ctx):
     D, C2 = making_contact.constants(kappa, loc, ctx.c)
-    z = 0.0 * D
+    z = np.zeros_like(D)
     return loc + z, z, D, C2, z
 
 

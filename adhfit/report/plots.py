@@ -1,0 +1,84 @@
+"""Plots (the only place matplotlib is imported). Every function draws into a caller's ``ax`` or a
+new figure, returns the axes, and writes a file only when given a path."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["plot_history", "STAGE_COLORS"]
+
+STAGE_COLORS = {"making_contact": "#1f77b4", "pinning": "#2ca02c", "delamination": "#d62728"}
+
+
+def _pyplot():
+    import matplotlib  # noqa: PLC0415
+    if matplotlib.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
+        try:
+            import IPython  # noqa: F401, PLC0415
+            in_notebook = IPython.get_ipython() is not None
+        except ImportError:
+            in_notebook = False
+        if not in_notebook:
+            matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+    return plt
+
+
+def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | None = None):
+    """Force against the control variable, coloured by stage; the unstable branch dashed.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        From :func:`adhfit.simulate`.
+    scene : Scene, optional
+        When given, axes are in physical units (mN against µm or kPa); else dimensionless.
+    ax : matplotlib Axes, optional
+        Draw here; a new figure otherwise.
+    path : path, optional
+        Save the figure there.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    plt = _pyplot()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.0, 4.2), layout="constrained")
+    fr = result.frame
+    control = result.inputs.get("control", "displacement")
+    xkey = "delta" if control == "displacement" else "p"
+    x, f = fr[xkey].to_numpy(float), fr["f"].to_numpy(float)
+    xlabel, ylabel = ("δ/b" if xkey == "delta" else "Pb/2μh"), "F/(2μh b)"
+    if scene is not None:
+        sc = scene.scales(None)
+        if xkey == "delta":
+            x, xlabel = x * sc.length * 1e6, "displacement δ (µm)"
+        else:
+            x, xlabel = x * sc.pressure * 1e-3, "pressure P (kPa)"
+        f, ylabel = f * sc.force * 1e3, "force F (mN)"
+    stage, stable = fr["stage"].to_numpy(), fr["stable"].to_numpy(bool)
+    for name, color in STAGE_COLORS.items():
+        for mask, style in ((stable, "-"), (~stable, "--")):
+            m = (stage == name) & mask
+            if not m.any():
+                continue
+            # include the previous row so stages join without gaps
+            idx = np.flatnonzero(m)
+            idx = np.unique(np.concatenate([idx, np.maximum(idx - 1, 0)])) if idx[0] > 0 else idx
+            ax.plot(x[idx], f[idx], style, color=color,
+                    label=name.replace("_", " ") + ("" if style == "-" else " (unstable)"))
+    s = result.summary
+    tp = s["turning_point"]
+    j = int(np.flatnonzero(stable)[-1])
+    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (pull-off)")
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(f"{control} control, {result.inputs.get('slip')}" + ("" if tp else ""))
+    ax.legend(fontsize=8)
+    if path is not None:
+        ax.figure.savefig(path, dpi=130)
+    return ax
