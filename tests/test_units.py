@@ -208,3 +208,13 @@ def test_scales_frozen_and_unknown_group():
         s.b = 2.0  # type: ignore[misc]
     with pytest.raises(InputError, match="'group'"):
         s.to_si("lambda0", 1.0)
+
+
+def test_edge_modules_import_no_plotting_or_fitting_libraries():
+    """units, scene and data sit below fitting/report (STYLE.md layout): no matplotlib, lmfit, emcee."""
+    import subprocess
+    import sys
+    code = ("import sys, adhfit.units, adhfit.scene, adhfit.data; "
+            "print(sorted(m for m in ('matplotlib', 'lmfit', 'emcee') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
