@@ -177,14 +177,88 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None):
 
 
 def _onset(slip, ctx, pc, kappa_m, d_fix):
-    """State where G first reaches w: no-slip delamination at a = a_m; frictionless pinning at alpha_w."""
+    """State where G first reaches w: no-slip delamination at a = a_m; frictionless pinning at alpha_w.
+
+    Displacement control: one bracketed solve. Pressure control: the pressure can fall far below its
+    end-of-loading value before G reaches w (strong adhesion), so the pinning path is followed by
+    continuation and the onset solved from the last pinned state.
+
+    Returns
+    -------
+    branch, loc, x, kappa, path
+        ``path`` is (alpha, x, kappa) along pinning for pressure control (predictors), else None.
+    """
     if slip == "no-slip":
         branch, loc = BRANCHES[("delamination", "no-slip")], np.array([ctx.a_m])
     else:
         branch = BRANCHES[("pinning", "frictionless")]
         loc = np.array([float(delamination.frictionless_angle(ctx.w))])
-    x, k = _solve_rows(branch, loc, ctx, pc, kappa_m, d_fix, np.array([kappa_m]))
-    return branch, loc, x, k
+    if not pc:
+        x, k = _solve_rows(branch, loc, ctx, pc, kappa_m, d_fix, np.array([kappa_m]))
+        return branch, loc, x, k, None
+    path = _pinning_path(slip, ctx, kappa_m, d_fix)
+    al, xs, ks = path
+    if slip == "no-slip":
+        x0 = None  # bracketed in t
+    else:
+        x0 = np.array([xs[-1]])
+    x, k = solve_state(branch, loc, ctx, d_fix=d_fix, kappa0=np.array([ks[-1]]), x0=x0)
+    return branch, loc, x, k, (np.append(al, float(np.real(
+        evaluate(branch, x, k, loc, ctx)["alpha"][0]))), np.append(xs, np.nan if x is None else x[0]),
+        np.append(ks, k[0]))
+
+
+def _pinning_path(slip, ctx, kappa_m, d_fix, max_steps=400):
+    """Pressure control: follow pinning from alpha = 0 until G = w is near (adaptive steps).
+
+    Each state starts from a linear extrapolation of the last two; a failed or out-of-domain step is
+    halved. Returns arrays (alpha, x, kappa) of the pinned states, the last one just before onset.
+    """
+    pin = BRANCHES[("pinning", slip)]
+    alpha_w = float(delamination.frictionless_angle(ctx.w))
+    x0 = 1.0 if slip == "no-slip" else ctx.a_m
+    al, xs, ks = [0.0], [x0], [kappa_m]
+    h = 0.05
+    for _ in range(max_steps):
+        a_new = al[-1] + h
+        if slip == "frictionless" and a_new >= alpha_w * (1 - 1e-6):
+            break
+        if len(al) > 1:
+            s = (a_new - al[-1]) / (al[-1] - al[-2])
+            xg, kg = xs[-1] + s * (xs[-1] - xs[-2]), ks[-1] + s * (ks[-1] - ks[-2])
+        else:
+            xg, kg = xs[-1], ks[-1]
+        try:
+            x, k = solve_state(pin, np.array([a_new]), ctx, d_fix=d_fix, kappa0=np.array([kg]),
+                               x0=None if slip == "no-slip" else np.array([xg]))
+            st = evaluate(pin, x, k, np.array([a_new]), ctx)
+            good = bool(st["ok"][0]) and np.isfinite(np.real(st["f"][0]))
+        except ConvergenceError:
+            good = False
+        if not good:
+            h *= 0.5
+            if h < 1e-7:
+                if slip == "no-slip" and len(al) > 1:
+                    break  # G -> w: the t-bracket of G <= w closes; solve the onset from here
+                raise ConvergenceError("pressure-control pinning: continuation stalled",
+                                       {"alpha": al[-1], "kappa": ks[-1], "d": d_fix, "w": ctx.w})
+            continue
+        G = float(np.real(st["G"][0]))
+        if slip == "no-slip" and G >= ctx.w:
+            if h < 1e-4:
+                break
+            h *= 0.25  # overshot the onset: approach it more slowly
+            continue
+        al.append(a_new)
+        xs.append(float(x[0]))
+        ks.append(float(k[0]))
+        h = min(1.6 * h, 0.1)
+        if slip == "no-slip" and G > ctx.w * (1 - 1e-3):
+            break
+    else:
+        raise ConvergenceError("pressure-control pinning: too many continuation steps",
+                               {"alpha": al[-1], "d": d_fix, "w": ctx.w})
+    return np.array(al), np.array(xs), np.array(ks)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -273,7 +347,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
             "f": 0.0, "G": 0.0}
 
     # 2. onset of delamination
-    on_branch, on_loc, on_x, on_k = _onset(slip, ctx, pc, kappa_m, d_fix)
+    on_branch, on_loc, on_x, on_k, path = _onset(slip, ctx, pc, kappa_m, d_fix)
     onset = evaluate(on_branch, on_x, on_k, on_loc, ctx)
     check_ok(onset, "onset of delamination", info)
     alpha_on, a_on, k_on = (float(np.real(onset[k][0])) for k in ("alpha", "a", "p"))
@@ -286,6 +360,10 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     if slip == "frictionless":
         x_guess = ctx.a_m + (a_on - ctx.a_m) * s
     k_guess = kappa_m + (k_on - kappa_m) * s
+    if path is not None:  # pressure control: interpolate the continuation path
+        k_guess = np.interp(al, path[0], path[2])
+        if slip == "frictionless":
+            x_guess = np.interp(al, path[0], path[1])
     x_pin, k_pin = _solve_rows(pin, al, ctx, pc, kappa_dc, d_fix, k_guess, x_guess)
     s_pin = evaluate(pin, x_pin, k_pin, al, ctx)
     check_ok(s_pin, "pinning", info)
@@ -431,7 +509,7 @@ def state_at(control: str, slip: str, stage: str, *, p: float | None = None, d: 
         st = evaluate(branch, None, k, np.array([loc]), ctx)
     else:
         ctx, kappa_m = _ctx_after_loading(v, c, pc)
-        ob, ol, ox, okp = _onset(slip, ctx, pc, kappa_m, d_fix)
+        ob, ol, ox, okp, path = _onset(slip, ctx, pc, kappa_m, d_fix)
         on = evaluate(ob, ox, okp, ol, ctx)
         k_on = float(np.real(on["p"][0]))
         if stage == "pinning":
@@ -440,6 +518,10 @@ def state_at(control: str, slip: str, stage: str, *, p: float | None = None, d: 
             xg = None
             if slip == "frictionless":
                 xg = np.array([ctx.a_m + (float(np.real(on["a"][0])) - ctx.a_m) * frac])
+            if path is not None:
+                kg = float(np.interp(loc, path[0], path[2]))
+                if slip == "frictionless":
+                    xg = np.array([float(np.interp(loc, path[0], path[1]))])
         else:
             p_cr = float(critical_pressure(d_fix)) if pc else 0.0
             kg = p_cr + (k_on - p_cr) * (loc / float(np.real(on["a"][0]))) ** 2
