@@ -31,17 +31,16 @@ LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {
                  "mu_h": ("mu_h", "force_per_length")},
     "substrate": {"radius": ("substrate_radius", "length")},
     "test": {"control": ("control", None), "pressure": ("pressure", "pressure"), "gap": ("gap", "length"),
-             "contact_radius_max": ("contact_radius_max", "length"),
-             "displacement_max": ("displacement_max", "length"),
-             "pressure_max": ("pressure_max", "pressure")},
+             "contact_radius_max": ("contact_radius_max", "length"), "pressure_max": ("pressure_max",
+             "pressure"), "displacement_max": ("displacement_max", "length")},
     "interface": {"slip": ("slip", None), "work_of_adhesion": ("work_of_adhesion", "energy_per_area")},
 }
 #: Scene field -> how the scene file spells it.
 FILE_KEY = {fld: f"[{sec}] {key}" for sec, keys in LAYOUT.items() for key, (fld, _) in keys.items()}
 _DIMENSION = {fld: dim for keys in LAYOUT.values() for fld, dim in keys.values()}
 
-#: Large-stretch approximation (paper eq. 10) against the exact neo-Hookean membrane: relative error
-#: of the free-inflation apex deflection at p = 0.6 (DESIGN.md C).
+#: Large-stretch approximation (eq. 10) vs the exact neo-Hookean membrane: (λ0, relative error of the
+#: free-inflation apex deflection at p = 0.6), DESIGN.md C.
 LARGE_STRETCH_ERROR = ((1.1, -0.33), (1.3, -0.15), (1.5, -0.067), (2.0, -0.012), (3.0, -0.001))
 
 _FIXED = {"displacement": ("pressure", "gap", "the fixed pressure, e.g. '1.2 kPa'"),
@@ -65,8 +64,7 @@ class Scene:
     control : {"displacement", "pressure"}
         Which quantity the test drives.
     prestretch : float
-        Equibiaxial pre-stretch λ0 > 1, dimensionless.  The model's observables do not depend on it
-        (large-stretch approximation); see :meth:`warnings` for its accuracy.
+        Equibiaxial pre-stretch λ0 > 1.  Observables do not depend on it; see :meth:`warnings`.
     mu_h : float or str, optional
         Membrane stiffness μh, N/m; ``None`` when it is to be fitted.
     pressure : float or str, optional
@@ -78,20 +76,15 @@ class Scene:
     work_of_adhesion : float or str, optional
         W_ad, J/m^2; ``None`` when it is to be fitted.
     contact_radius_max, displacement_max, pressure_max : float or str, optional
-        At most one loading end for simulations: the largest contact radius (m), the largest
-        contact displacement δ (m, displacement control) or the largest pressure (Pa, pressure
-        control) reached on loading.
+        At most one loading end for simulations: the largest contact radius (m), contact
+        displacement δ (m, displacement control) or pressure (Pa, pressure control) on loading.
     priors : dict, optional
-        ``{parameter: {"dist": ..., ...}}`` for fitted parameters (see :func:`normalize_priors`),
-        stored normalized to SI floats.
+        ``{parameter: {"dist": ..., ...}}`` for fitted parameters, see :func:`normalize_priors`.
     source : str, optional
-        File the scene was read from (not compared).  Strings with units (``"2 mm"``) are accepted
-        for every physical value and stored as SI floats.
+        File the scene was read from (not compared).
 
-    Raises
-    ------
-    InputError
-        Naming the first field that is missing, out of range or inconsistent with another.
+    Strings with units (``"2 mm"``) are accepted for every physical value and stored as SI floats.
+    Raises :class:`InputError` naming the first field missing, out of range or inconsistent.
     """
 
     membrane_radius: float
@@ -111,10 +104,9 @@ class Scene:
 
     def __post_init__(self) -> None:
         set_ = functools.partial(object.__setattr__, self)  # frozen: normalise fields in place
-        if self.control not in CONTROLS:
-            raise InputError("control", self.control, "one of 'displacement', 'pressure'")
-        if self.slip not in SLIPS:
-            raise InputError("slip", self.slip, "one of 'auto', 'no-slip', 'frictionless'")
+        for key, choices in (("control", CONTROLS), ("slip", SLIPS)):
+            if getattr(self, key) not in choices:
+                raise InputError(key, getattr(self, key), "one of " + ", ".join(map(repr, choices)))
         for key, dim in _DIMENSION.items():
             if dim is not None and getattr(self, key) is not None:
                 inf_ok = key == "substrate_radius"
@@ -203,15 +195,13 @@ class Scene:
         Returns
         -------
         dict
-            ``control, slip, p`` (displacement control) or ``d`` (pressure control), ``w, rs,
-            lambda0`` and, if the scene sets a loading end, one of ``a_max, delta_max, p_max``.
-            All dimensionless (DESIGN.md A1).
+            ``control, slip, p`` (or ``d`` under pressure control), ``w, rs, lambda0`` and one of
+            ``a_max, delta_max, p_max`` if the scene sets a loading end; dimensionless (A1).
 
         Raises
         ------
         InputError
-            A value is missing, or its dimensionless group is outside the model's domain (the
-            message gives the valid range in SI units and as a group).
+            A value is missing, or its group is outside the model's domain (range given in SI).
         """
         scales = self.scales(mu_h)
         slip = self.slip if slip is None else slip
@@ -231,9 +221,8 @@ class Scene:
         out["lambda0"] = self.prestretch
         if "p" in out and out["p"] + 1.0 / out["rs"] <= 0.0:  # as in adhfit.params.check_scene
             lowest = -2 * scales.mu_h / self.substrate_radius
-            raise InputError("pressure", self.pressure, f"above -2 mu_h / R_s = {lowest:g} Pa",
-                             "The membrane must be less concave than the substrate for contact to start "
-                             "at the apex.")
+            raise InputError("pressure", self.pressure, f"above -2 mu_h / R_s = {lowest:g} Pa", "The "
+                             "membrane must be less concave than the substrate (contact starts at the apex).")
         return out
 
     def warnings(self) -> list[str]:
@@ -389,7 +378,7 @@ def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:
     return raw
 
 
-def _suggest(word: str, known) -> str:
+def _suggest(word: str, known: Any) -> str:
     close = difflib.get_close_matches(word, list(known), n=1, cutoff=0.6)
     return f" did you mean '{close[0]}'?" if close else ""
 

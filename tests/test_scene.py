@@ -304,3 +304,16 @@ def test_pressure_max_checked_against_table():
               pressure_max=20e3)
     with pytest.raises(InputError, match="That is p_max = 10"):
         s.to_dimensionless(mu_h=2.0, work_of_adhesion=0.4, slip="no-slip")
+
+
+def test_to_dimensionless_feeds_simulate(write):
+    """Contract check against adhfit.simulate (DESIGN.md A2b): the keywords are accepted as given."""
+    import adhfit
+    simulate = getattr(adhfit, "simulate", None)
+    if simulate is None:
+        pytest.skip("adhfit.simulate not available yet")
+    s = load_scene(write(edit(A3, "[test]\n", "[test]\ncontact_radius_max = \"0.5 mm\"\n")))
+    result = simulate(**s.to_dimensionless(slip="frictionless"), points=40)
+    f_max_si = s.scales().from_f(result.summary["f_max"])
+    assert 0.0 < f_max_si < 0.1  # newtons: a few mN at the force scale 8 mN
+    assert list(result.frame.columns) == ["stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable"]
