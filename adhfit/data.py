@@ -117,6 +117,10 @@ class Curve:
     def __len__(self) -> int:
         return len(self.x)
 
+    def __repr__(self) -> str:
+        return (f"Curve(path={self.path!r}, control={self.control!r}, rows={len(self)}, "
+                f"i_turn={self.i_turn}, excluded={len(self.excluded)}, columns={list(self.units)})")
+
     @property
     def displacement(self) -> np.ndarray | None:
         """Displacement δ (m) under displacement control, else ``None``."""
@@ -178,53 +182,12 @@ def read_curve(path: str | Path, control: str) -> Curve:
     if control not in REQUIRED:
         raise InputError("control", control, "one of 'displacement', 'pressure'")
     where = str(path)
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise DataError(f"cannot read the file ({exc.strerror or exc})", path=where) from None
-    if not raw.strip():
-        raise DataError("the file is empty", path=where)
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")  # every byte maps: a non-UTF-8 'µ' must not stop a read
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    if lines and lines[-1] == "":
-        lines.pop()
-
-    excluded: list[tuple[int, str]] = []
-    header_no, rows = None, []
-    for no, line in enumerate(lines, start=1):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("#"):
-            excluded.append((no, "blank line" if not stripped else "comment line"))
-        elif header_no is None:
-            header_no = no
-        else:
-            rows.append(no)
-    if header_no is None:
-        raise DataError("the file has no header line (only blank or comment lines)", path=where)
+    raw, lines = _read_lines(path, where)
+    header_no, rows, excluded = _classify(lines, where)
     header = lines[header_no - 1]
     sep = next((s for s in (",", ";", "\t") if s in header), ",")
     names, factors, units = _parse_header(header, sep, control, where, header_no)
-
-    ncol = len(names)
-    for no in rows:
-        if lines[no - 1].count('"') % 2:  # a quoted cell spanning lines would shift every line number
-            raise DataError("unbalanced quote (cells spanning several lines are not supported)",
-                            path=where, line=no)
-        cells = next(csv.reader([lines[no - 1]], delimiter=sep))
-        if len(cells) != ncol:
-            raise DataError(f"{len(cells)} cells, but the header has {ncol} columns "
-                            f"({', '.join(_EXAMPLE[n].split()[0] for n in names)})", path=where, line=no)
-    body = "\n".join([header] + [lines[no - 1] for no in rows])
-    try:
-        table = pd.read_csv(io.StringIO(body), sep=sep, dtype=str, keep_default_na=False, na_filter=False,
-                            index_col=False, skip_blank_lines=False)
-    except (pd.errors.ParserError, ValueError) as exc:  # the checks above should leave none
-        raise DataError(f"cannot parse the table ({exc})", path=where) from None
-    if len(table) != len(rows):
-        raise DataError(f"read {len(table)} rows from {len(rows)} data lines", path=where)
+    table = _table(lines, header, rows, sep, names, where)
     if len(rows) < MIN_ROWS:
         raise DataError(f"only {len(rows)} data rows; at least {MIN_ROWS} are needed (loading, then "
                         "unloading)", path=where)
@@ -246,6 +209,63 @@ def read_curve(path: str | Path, control: str) -> Curve:
                  i_turn=int(np.argmax(x)), time=values.get("time"),
                  contact_radius=values.get("contact_radius"), excluded=tuple(excluded),
                  sha256=hashlib.sha256(raw).hexdigest(), units=units)
+
+
+def _read_lines(path: str | Path, where: str) -> tuple[bytes, list[str]]:
+    """The file's bytes and its lines (any line ending; line n is ``lines[n - 1]``)."""
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise DataError(f"cannot read the file ({exc.strerror or exc})", path=where) from None
+    if not raw.strip():
+        raise DataError("the file is empty", path=where)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")  # every byte maps: a non-UTF-8 'µ' must not stop a read
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    return raw, lines
+
+
+def _classify(lines: list[str], where: str) -> tuple[int, list[int], list[tuple[int, str]]]:
+    """Header line number, data line numbers, and the (line, reason) of blank and comment lines."""
+    excluded: list[tuple[int, str]] = []
+    header_no, rows = None, []
+    for no, line in enumerate(lines, start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            excluded.append((no, "blank line" if not stripped else "comment line"))
+        elif header_no is None:
+            header_no = no
+        else:
+            rows.append(no)
+    if header_no is None:
+        raise DataError("the file has no header line (only blank or comment lines)", path=where)
+    return header_no, rows, excluded
+
+
+def _table(lines: list[str], header: str, rows: list[int], sep: str, names: list[str], where: str
+           ) -> pd.DataFrame:
+    """The data rows as strings, one per line in ``rows``; a row of the wrong shape is an error."""
+    for no in rows:
+        if lines[no - 1].count('"') % 2:  # a quoted cell spanning lines would shift every line number
+            raise DataError("unbalanced quote (cells spanning several lines are not supported)",
+                            path=where, line=no)
+        cells = next(csv.reader([lines[no - 1]], delimiter=sep))
+        if len(cells) != len(names):
+            raise DataError(f"{len(cells)} cells, but the header has {len(names)} columns "
+                            f"({', '.join(names)})", path=where, line=no)
+    body = "\n".join([header] + [lines[no - 1] for no in rows])
+    try:
+        table = pd.read_csv(io.StringIO(body), sep=sep, dtype=str, keep_default_na=False, na_filter=False,
+                            index_col=False, skip_blank_lines=False)
+    except (pd.errors.ParserError, ValueError) as exc:  # the checks above should leave none
+        raise DataError(f"cannot parse the table ({exc})", path=where) from None
+    if len(table) != len(rows):
+        raise DataError(f"read {len(table)} rows from {len(rows)} data lines", path=where)
+    return table
 
 
 def _cells(line: str, sep: str) -> list[str]:

@@ -328,3 +328,9 @@ def test_latin1_file_with_micro_sign(write):
 
 def test_header_only(write):
     assert "only 0 data rows" in str(error(write, "displacement [um],force [mN]\n"))
+
+
+def test_repr_is_short(write):
+    c = read_curve(write(csv_text()), "displacement")
+    assert repr(c).endswith("control='displacement', rows=12, i_turn=4, excluded=0, "
+                            "columns=['displacement', 'force'])")
