@@ -1,0 +1,506 @@
+"""Compiled (numba) kernels of the forward-model engine: same semantics as the numpy path, per row.
+
+This module is a scalar translation of :mod:`.integrals`, :mod:`.membrane`, the five branch unpack
+functions and the solves of :mod:`.branches` / :mod:`.solve`, plus batch entry points that loop over
+rows and return arrays. Its only reason to exist is speed: one numpy call costs ~150-300 us of
+overhead and ``scipy.special.elliprf`` ~0.5 us per element; here one row costs about a microsecond.
+Importing it imports numba (~0.5 s), so only :mod:`.backend` imports it, lazily.
+
+Conventions
+-----------
+* Scalar kernels are generic: numba compiles them for float64 (plain evaluations) and complex128
+  (complex-step derivatives, DESIGN.md B1-B2 and :mod:`.solve`); on the real path a square root of a
+  negative number is NaN, exactly as in numpy.
+* Branch codes (``MC, PIN_NS, PIN_FR, DEL_NS, DEL_FR``) replace the :class:`~.branches.Branch`
+  objects; the context is passed as the four floats ``c, w, a_m, L_m``.
+* Solves never raise: every row gets a status (``OK`` or one of the ``FAIL_*`` codes) and the Python
+  layer raises :class:`~adhfit.errors.ConvergenceError` with the row's inputs.
+
+Everything is dimensionless (DESIGN.md A1).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["MC", "PIN_NS", "PIN_FR", "DEL_NS", "DEL_FR", "OK", "FAIL_BRACKET", "FAIL_INNER",
+           "FAIL_OUTER", "carlson_rf", "carlson_rd", "evaluate_batch", "solve_batch",
+           "derivative_batch", "first_bad"]
+
+MC, PIN_NS, PIN_FR, DEL_NS, DEL_FR = 0, 1, 2, 3, 4
+OK, FAIL_BRACKET, FAIL_INNER, FAIL_OUTER = 0, 1, 2, 3
+
+#: complex step, as in :data:`.solve.STEP`
+STEP = 1e-30
+XTOL = 4e-15
+MAXITER = 60
+#: relative truncation error aimed at in the Carlson series (both are 7th-degree, DLMF 19.36.1-2)
+_RERR = 1e-16
+_RF_FACTOR = 1.0 / (3.0 * _RERR) ** 0.125
+_RD_FACTOR = 1.0 / (0.25 * _RERR) ** 0.125
+
+# error_model="numpy": division by zero gives inf/NaN as in numpy instead of raising
+_jit = njit(cache=True, nogil=True, error_model="numpy")
+
+
+# ----------------------------------------------------------------------------------------------
+# Carlson symmetric integrals (Carlson 1995, DLMF 19.36), real or complex
+
+
+@_jit
+def _ph_good(z):
+    """Argument in the cut plane (not on the negative real axis, not NaN), as scipy checks it."""
+    zr, zi = z.real, z.imag
+    if zr != zr or zi != zi:
+        return False
+    if zi == 0.0:
+        return zr >= 0.0
+    return abs(zr) < math.inf
+
+
+@_jit
+def carlson_rf(x, y, z):
+    """R_F(x, y, z) by duplication (DLMF 19.36.1, 7th-degree series); NaN outside the cut plane."""
+    if not (_ph_good(x) and _ph_good(y) and _ph_good(z)):
+        return (x + y + z) * math.nan
+    if (x == 0.0) + (y == 0.0) + (z == 0.0) >= 2:
+        return (x + y + z) * math.inf
+    A0 = (x + y + z) / 3.0
+    dx, dy = A0 - x, A0 - y
+    Q = max(abs(dx), abs(dy), abs(A0 - z)) * _RF_FACTOR
+    xm, ym, zm, Am = x, y, z, A0
+    f = 1.0
+    for _ in range(100):
+        if abs(Am) > Q * f:
+            break
+        sx, sy, sz = np.sqrt(xm), np.sqrt(ym), np.sqrt(zm)
+        lam = sx * (sy + sz) + sy * sz
+        xm, ym, zm, Am = 0.25 * (xm + lam), 0.25 * (ym + lam), 0.25 * (zm + lam), 0.25 * (Am + lam)
+        f *= 0.25
+    X = f * dx / Am
+    Y = f * dy / Am
+    Z = -(X + Y)
+    E2 = X * Y - Z * Z
+    E3 = X * Y * Z
+    s = (1.0 - E2 / 10.0 + E3 / 14.0 + E2 * E2 / 24.0 - 3.0 * E2 * E3 / 44.0
+         - 5.0 * E2 * E2 * E2 / 208.0 + 3.0 * E3 * E3 / 104.0 + E2 * E2 * E3 / 16.0)
+    return s / np.sqrt(Am)
+
+
+@_jit
+def carlson_rd(x, y, z):
+    """R_D(x, y, z) by duplication (DLMF 19.36.2, 7th-degree series); NaN outside the cut plane."""
+    if not (_ph_good(x) and _ph_good(y) and _ph_good(z)):
+        return (x + y + z) * math.nan
+    if z == 0.0 or (x == 0.0 and y == 0.0):
+        return (x + y + z) * math.inf
+    A0 = (x + y + 3.0 * z) / 5.0
+    dx, dy = A0 - x, A0 - y
+    Q = max(abs(dx), abs(dy), abs(A0 - z)) * _RD_FACTOR
+    xm, ym, zm, Am = x, y, z, A0
+    f = 1.0
+    acc = 0.0 * A0
+    for _ in range(100):
+        if abs(Am) > Q * f:
+            break
+        sx, sy, sz = np.sqrt(xm), np.sqrt(ym), np.sqrt(zm)
+        lam = sx * (sy + sz) + sy * sz
+        acc += f / (sz * (zm + lam))
+        xm, ym, zm, Am = 0.25 * (xm + lam), 0.25 * (ym + lam), 0.25 * (zm + lam), 0.25 * (Am + lam)
+        f *= 0.25
+    X = f * dx / Am
+    Y = f * dy / Am
+    Z = -(X + Y) / 3.0
+    XY, Z2 = X * Y, Z * Z
+    E2 = XY - 6.0 * Z2
+    E3 = (3.0 * XY - 8.0 * Z2) * Z
+    E4 = 3.0 * (XY - Z2) * Z2
+    E5 = XY * Z2 * Z
+    s = (1.0 - 3.0 * E2 / 14.0 + E3 / 6.0 + 9.0 * E2 * E2 / 88.0 - 3.0 * E4 / 22.0
+         - 9.0 * E2 * E3 / 52.0 + 3.0 * E5 / 26.0 - E2 * E2 * E2 / 16.0 + 3.0 * E3 * E3 / 40.0
+         + 3.0 * E2 * E4 / 20.0 + 45.0 * E2 * E2 * E3 / 272.0 - 9.0 * (E3 * E4 + E2 * E5) / 68.0)
+    return f * s / (Am * np.sqrt(Am)) + 3.0 * acc
+
+
+# ----------------------------------------------------------------------------------------------
+# free membrane (integrals.py, membrane.py)
+
+
+@_jit
+def _roots(kappa, D, C2):
+    """q and u_minus of Q(u) = (q - kappa^2 u)(u - u_minus) (integrals.quadratic_roots)."""
+    B = 1.0 - 2.0 * kappa * D
+    C = C2 - D * D
+    sq = np.sqrt(1.0 - 4.0 * kappa * D + 4.0 * kappa * kappa * C2)
+    if B.real >= 0.0:
+        q = 0.5 * (B + sq)
+    else:
+        q = 2.0 * kappa * kappa * C / (sq - B)
+    return q, -C / q
+
+
+@_jit
+def _pair(C, x1, x2, x3, y1, y2, y3, span, need_j1):
+    """J0 and the u-moment from the factor values at the two limits (integrals._carlson_pair)."""
+    X1, X2, X3 = np.sqrt(x1), np.sqrt(x2), np.sqrt(x3)
+    Y1, Y2, Y3 = np.sqrt(y1), np.sqrt(y2), np.sqrt(y3)
+    U12 = (X1 * X2 * Y3 + Y1 * Y2 * X3) / span
+    U13 = (X1 * X3 * Y2 + Y1 * Y3 * X2) / span
+    U23 = (X2 * X3 * Y1 + Y2 * Y3 * X1) / span
+    s12, s13, s23 = U12 * U12, U13 * U13, U23 * U23
+    j0 = carlson_rf(s12, s13, s23)
+    if not need_j1:
+        return j0, 0.0 * j0
+    return j0, C / 3.0 * carlson_rd(s13, s23, s12) + X3 * Y3 / U12
+
+
+@_jit
+def _integrals(kappa, D, C2, a, q_edge, through, need_j1):
+    """J0, J1 from the edge to the clamp (integrals.free_membrane_integrals), one state."""
+    q, um = _roots(kappa, D, C2)
+    k2 = kappa * kappa
+    C = C2 - D * D
+    ea = a * a
+    L1e = q - k2 * ea
+    L2e = ea - um
+    if abs(L1e) < abs(L2e):
+        L1e = q_edge / L2e
+    else:
+        L2e = q_edge / L1e
+    one = 1.0 + 0.0 * ea
+    if not through:
+        j0, ju = _pair(C, q - k2, 1.0 - um, one, L1e, L2e, ea, 1.0 - ea, need_j1)
+    else:
+        zero = 0.0 * ea
+        j0a, jua = _pair(C, L1e, L2e, ea, q - k2 * um, zero, um, L2e, need_j1)
+        j0b, jub = _pair(C, q - k2, 1.0 - um, one, q - k2 * um, zero, um, 1.0 - um, need_j1)
+        j0, ju = j0a + j0b, jua + jub
+    return j0, kappa * ju + D * j0, q, um
+
+
+@_jit
+def _substrate_cos(a, c):
+    return np.sqrt(1.0 - (a * c) ** 2)
+
+
+@_jit
+def _free_membrane(kappa, D, C2, a, c, cos_ta, need_j1):
+    """J0, d and admissibility of one state (membrane.free_membrane, integrals.admissible)."""
+    q_edge = (a * a + C2) * cos_ta * cos_ta
+    through = cos_ta.real < 0.0
+    j0, j1, q, um = _integrals(kappa, D, C2, a, q_edge, through, need_j1)
+    ok = (q - kappa * kappa).real >= 0.0 and q_edge.real >= 0.0
+    if through:
+        ok = ok and um.real >= 0.0
+    sag = a * a * c / (1.0 + _substrate_cos(a, c))
+    return j0, j1 - sag, ok
+
+
+# ----------------------------------------------------------------------------------------------
+# branches (branches.py, making_contact.py, pinning.py, delamination.py)
+
+
+@_jit
+def _noslip_constants(kappa, a, c, alpha, t):
+    s, ac = _substrate_cos(a, c), a * c
+    sin_ta = s * np.sin(alpha) - ac * np.cos(alpha)
+    return sin_ta * a * t - kappa * a * a, a * a * (t * t - 1.0)
+
+
+@_jit
+def _frictionless_constants(kappa, a, c, alpha):
+    ta = np.tan(alpha)
+    return a * _substrate_cos(a, c) * ta - (kappa + c) * a * a, (a * ta) ** 2
+
+
+@_jit
+def _unpack(code, x, kappa, loc, c, w, a_m):
+    """(a, alpha, D, C2, G) of one state on branch ``code`` (the branches._mc ... _del_fr)."""
+    # all three share one dtype (the batch functions see to it), so every branch returns one type
+    zero = 0.0 * loc
+    if code == MC:
+        D = -(kappa + c) * loc * loc
+        return loc + zero, zero, D + zero, zero, zero
+    if code == PIN_NS:
+        # located by G (0 -> w): alpha from eq. (52) solved for alpha, as in delamination
+        a = a_m + zero
+        alpha = np.arccos(1.0 - (loc - 0.5 * (x - 1.0) ** 2) / x)
+        D, C2 = _noslip_constants(kappa, a, c, alpha, x)
+        return a, alpha + zero, D + zero, C2 + zero, loc + zero
+    if code == PIN_FR:
+        D, C2 = _frictionless_constants(kappa, x, c, loc)
+        ta = np.tan(loc)
+        return x + zero, loc + zero, D + zero, C2 + zero, 0.5 * ta * ta + zero
+    if code == DEL_NS:
+        alpha = np.arccos(1.0 - (w - 0.5 * (x - 1.0) ** 2) / x)
+        D, C2 = _noslip_constants(kappa, loc, c, alpha, x)
+        return loc + zero, alpha + zero, D + zero, C2 + zero, w + zero
+    alpha = math.atan(math.sqrt(2.0 * w))
+    D, C2 = _frictionless_constants(kappa, loc, c, alpha)
+    return loc + zero, alpha + zero, D + zero, C2 + zero, w + zero
+
+
+@_jit
+def _state(code, x, kappa, loc, c, w, a_m, need_j1):
+    """branches.evaluate for one state: (a, alpha, d, f, G, J0, ok); p is kappa."""
+    a, alpha, D, C2, G = _unpack(code, x, kappa, loc, c, w, a_m)
+    s, ac = _substrate_cos(a, c), a * c
+    cos_ta = s * np.cos(alpha) + ac * np.sin(alpha)
+    j0, d, ok = _free_membrane(kappa, D, C2, a, c, cos_ta, need_j1)
+    return a, alpha, d, -np.pi * D, G, j0, ok
+
+
+@_jit
+def _target(code, loc, c, a_m, L_m):
+    """The J0 an implicit branch's state must have (eq. 57 / eq. 61)."""
+    if code == DEL_NS:
+        return (L_m + np.log(a_m / loc)
+                + np.log((1.0 + _substrate_cos(loc, c)) / (1.0 + _substrate_cos(a_m, c))))
+    return L_m + 0.0 * loc
+
+
+@_jit
+def _residual(code, x, kappa, loc, c, w, a_m, L_m):
+    """Material condition J0 - target (branches._residual); J1 is not needed."""
+    j0 = _state(code, x, kappa, loc, c, w, a_m, False)[5]
+    return j0 - _target(code, loc, c, a_m, L_m)
+
+
+@_jit
+def _bracket(code, loc, c, w, a_m):
+    """(lo, hi) of the unknown (pinning.noslip_stretch_bracket, branches._a_limit, ...)."""
+    if code == PIN_FR:
+        lim = min(1.0, 1.0 / c) if c > 0 else 1.0
+        return 1e-9 * a_m, (1.0 - 1e-9) * lim
+    # t where eq. (62) has a real angle, for G = loc (no-slip pinning) or G = w (delamination)
+    s = math.sqrt(2.0 * (loc if code == PIN_NS else w))
+    return max(1.0 - s, s - 1.0, 0.0) + 1e-12, 1.0 + s - 1e-12
+
+
+@_jit
+def _implicit(code):
+    return code == PIN_NS or code == PIN_FR or code == DEL_NS
+
+
+# ----------------------------------------------------------------------------------------------
+# solves (solve.newton, branches.solve_unknown / solve_state / derivative), one row at a time
+
+
+@_jit
+def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
+    """solve.newton with a bracket for one row: (x, status, r_lo, r_hi).
+
+    Same rules: complex-step derivative, the bracket's residuals must differ in sign (checked), a
+    Newton step that leaves the bracket (or a NaN step) is replaced by bisection, an exact zero
+    residual is kept, converged when the step or the bracket is below xtol (1 + |x|).
+    """
+    kc, lc = complex(kappa, 0.0), complex(loc, 0.0)
+    rlo = _residual(code, complex(lo, STEP), kc, lc, c, w, a_m, L_m).real
+    rhi = _residual(code, complex(hi, STEP), kc, lc, c, w, a_m, L_m).real
+    # NaN at hi counts as the other side (the domain ends inside the bracket)
+    if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
+        return math.nan, FAIL_BRACKET, rlo, rhi
+    neg_at_lo = rlo < 0
+    x = x0
+    if x < min(lo, hi):
+        x = min(lo, hi)
+    if x > max(lo, hi):
+        x = max(lo, hi)
+    for _ in range(MAXITER):
+        z = _residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
+        r, dr = z.real, z.imag / STEP
+        finite = math.isfinite(r) and math.isfinite(dr)
+        below = finite and ((r < 0) if neg_at_lo else (r > 0))
+        if below:
+            lo = x
+        elif finite:
+            hi = x
+        xn = x + (-r / dr) if (finite and dr != 0) else math.nan
+        inside = math.isfinite(xn) and min(lo, hi) <= xn <= max(lo, hi)
+        exact = finite and r == 0
+        if exact:
+            xn = x
+        elif not inside:
+            xn = 0.5 * (lo + hi)
+        tol = XTOL * (1.0 + abs(x))
+        done = exact or (inside and abs(xn - x) <= tol) or abs(hi - lo) <= tol
+        x = xn
+        if done:
+            return x, OK, rlo, rhi
+    return math.nan, FAIL_INNER, rlo, rhi
+
+
+@_jit
+def _inner(code, kappa, loc, c, w, a_m, L_m, x0, has_x0):
+    """branches.solve_unknown for one row: the unknown from the material condition."""
+    lo, hi = _bracket(code, loc, c, w, a_m)
+    if not has_x0:
+        x0 = 0.5 * (lo + hi)
+    x, st, _, _ = _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi)
+    return x, st
+
+
+@_jit
+def _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m):
+    """branches._propagate: one complex Newton step from the real root carries dx/d(kappa, loc)."""
+    r_x = _residual(code, complex(x, STEP), complex(kappa, 0.0), complex(lc.real, 0.0),
+                    c, w, a_m, L_m).imag / STEP
+    return x - _residual(code, complex(x, 0.0), kc, lc, c, w, a_m, L_m) / r_x
+
+
+@_jit
+def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, k0):
+    """branches.solve_state under pressure control for one row: (x, kappa, status).
+
+    Unbracketed Newton on kappa for the gap; the gap's derivative is carried through the inner
+    solve by :func:`_propagate`; a NaN step is halved back toward the last good kappa.
+    """
+    implicit = _implicit(code)
+    lc = complex(loc, 0.0)
+    x, xm, has_memo = 0.0, 0.0, False
+    kappa, last_good = k0, k0
+    converged = False
+    for _ in range(MAXITER):
+        kc = complex(kappa, STEP)
+        xc = 0j
+        if implicit:
+            # an iterate with no inner solution gives NaN, so the Newton below backs off
+            x, st = _inner(code, kappa, loc, c, w, a_m, L_m, xm, has_memo)
+            if st == OK:
+                xm, has_memo = x, True
+            xc = _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m)
+        g = _state(code, xc, kc, lc, c, w, a_m, True)[2] - d_fix
+        r, dr = g.real, g.imag / STEP
+        good = math.isfinite(r) and math.isfinite(dr) and dr != 0
+        if good:
+            last_good = kappa
+            step = -r / dr
+            kn = kappa + step
+        else:
+            step = 0.0
+            kn = 0.5 * (kappa + last_good)
+        done = good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(kappa)))
+        kappa = kn
+        if done:
+            converged = True
+            break
+    if not converged:
+        return x, kappa, FAIL_OUTER
+    if implicit:
+        x, st = _inner(code, kappa, loc, c, w, a_m, L_m, xm, has_memo)
+        return x, kappa, st
+    return x, kappa, OK
+
+
+@_jit
+def solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
+    """branches.solve_state row by row.
+
+    Parameters
+    ----------
+    code : int
+        Branch code.
+    pressure : bool
+        Pressure control (``kappa`` holds the start values, ``d_fix`` the gap) or displacement
+        control (``kappa`` holds the fixed pressures).
+    loc, kappa, x0 : ndarray of float64
+        Locators, pressures (or start pressures) and start values of the unknown (used where
+        ``has_x0``; else the middle of the bracket).
+
+    Returns
+    -------
+    x, kappa : ndarray of float64
+    status : ndarray of int64
+        ``OK`` or the ``FAIL_*`` code of the row.
+    """
+    n = loc.size
+    xs = np.zeros(n)
+    ks = np.empty(n)
+    status = np.zeros(n, dtype=np.int64)
+    implicit = _implicit(code)
+    for i in range(n):
+        if pressure:
+            xs[i], ks[i], status[i] = _solve_pressure(code, loc[i], c, w, a_m, L_m, d_fix, kappa[i])
+        else:
+            ks[i] = kappa[i]
+            if implicit:
+                xs[i], status[i] = _inner(code, kappa[i], loc[i], c, w, a_m, L_m, x0[i], has_x0)
+    return xs, ks, status
+
+
+@_jit
+def evaluate_batch(code, x, kappa, loc, c, w, a_m):
+    """branches.evaluate row by row; x, kappa, loc share one dtype (float64 or complex128).
+
+    Returns
+    -------
+    out : ndarray, shape (7, n), dtype of the inputs
+        Rows ``a, alpha, p, d, f, G, J0``.
+    ok : ndarray of bool
+    """
+    n = loc.size
+    out = np.empty((7, n), dtype=loc.dtype)
+    ok = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        st = _state(code, x[i], kappa[i], loc[i], c, w, a_m, True)
+        a, alpha, d, f, G, j0, good = st
+        out[0, i], out[1, i], out[2, i], out[3, i] = a, alpha, kappa[i] + 0.0 * f, d
+        out[4, i], out[5, i], out[6, i] = f, G, j0
+        ok[i] = good
+    return out, ok
+
+
+@_jit
+def _derivative_row(code, pressure, loc, x, kappa, c, w, a_m, L_m):
+    """The complex state whose imaginary parts over STEP are d(observable)/d(locator)."""
+    implicit = _implicit(code)
+    lr, lc = complex(loc, 0.0), complex(loc, STEP)
+    kr = complex(kappa, 0.0)
+    if not pressure:
+        xc = _propagate(code, x, kappa, kr, lc, c, w, a_m, L_m) if implicit else 0j
+        return xc, kr
+    if not implicit:
+        gk = _state(code, 0j, complex(kappa, STEP), lr, c, w, a_m, True)[2].imag / STEP
+        gl = _state(code, 0j, kr, lc, c, w, a_m, True)[2].imag / STEP
+        return 0j, complex(kappa, -(STEP * gl / gk))
+    t_r = _target(code, lr, c, a_m, L_m)
+    t_l = _target(code, lc, c, a_m, L_m)
+    s = _state(code, complex(x, STEP), kr, lr, c, w, a_m, True)
+    Rx, Gx = (s[5] - t_r).imag / STEP, s[2].imag / STEP
+    s = _state(code, complex(x, 0.0), complex(kappa, STEP), lr, c, w, a_m, True)
+    Rk, Gk = (s[5] - t_r).imag / STEP, s[2].imag / STEP
+    s = _state(code, complex(x, 0.0), kr, lc, c, w, a_m, True)
+    Rl, Gl = (s[5] - t_l).imag / STEP, s[2].imag / STEP
+    det = Rx * Gk - Rk * Gx
+    dx = -(Rl * Gk - Rk * Gl) / det
+    dk = -(Rx * Gl - Rl * Gx) / det
+    return complex(x, STEP * dx), complex(kappa, STEP * dk)
+
+
+@_jit
+def derivative_batch(code, pressure, loc, x, kappa, c, w, a_m, L_m):
+    """branches.derivative row by row: shape (7, n), rows d(a, alpha, p, d, f, G, J0)/d(locator)."""
+    n = loc.size
+    out = np.empty((7, n))
+    for i in range(n):
+        xc, kc = _derivative_row(code, pressure, loc[i], x[i], kappa[i], c, w, a_m, L_m)
+        lc = complex(loc[i], STEP)
+        a, alpha, d, f, G, j0, _ = _state(code, xc, kc, lc, c, w, a_m, True)
+        out[0, i], out[1, i], out[2, i] = a.imag / STEP, alpha.imag / STEP, kc.imag / STEP
+        out[3, i], out[4, i], out[5, i], out[6, i] = (d.imag / STEP, f.imag / STEP, G.imag / STEP,
+                                                      j0.imag / STEP)
+    return out
+
+
+@_jit
+def first_bad(ok, vals):
+    """Index of the first state outside the model or with a non-finite observable; -1 if none."""
+    for i in range(ok.size):
+        if not ok[i]:
+            return i
+        for k in range(vals.shape[0]):
+            if not math.isfinite(vals[k, i].real):
+                return i
+    return -1
