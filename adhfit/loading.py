@@ -176,89 +176,72 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None):
     return (None if branch.target is None else xs), ks
 
 
+def _pin_end(slip, ctx):
+    """Locator of the onset on the pinning branch: G = w (no slip) or alpha = atan sqrt(2w)."""
+    return ctx.w if slip == "no-slip" else float(delamination.frictionless_angle(ctx.w))
+
+
 def _onset(slip, ctx, pc, kappa_m, d_fix):
-    """State where G first reaches w: no-slip delamination at a = a_m; frictionless pinning at alpha_w.
+    """The end of pinning, where G first reaches w.
 
     Displacement control: one bracketed solve. Pressure control: the pressure can fall far below its
     end-of-loading value before G reaches w (strong adhesion), so the pinning path is followed by
-    continuation and the onset solved from the last pinned state.
+    continuation from the end of loading.
 
     Returns
     -------
     branch, loc, x, kappa, path
-        ``path`` is (alpha, x, kappa) along pinning for pressure control (predictors), else None.
+        ``path`` = (locators, x, kappa) along pinning under pressure control (predictors), else None.
     """
-    if slip == "no-slip":
-        branch, loc = BRANCHES[("delamination", "no-slip")], np.array([ctx.a_m])
-    else:
-        branch = BRANCHES[("pinning", "frictionless")]
-        loc = np.array([float(delamination.frictionless_angle(ctx.w))])
+    branch = BRANCHES[("pinning", slip)]
+    loc = np.array([_pin_end(slip, ctx)])
     if not pc:
         x, k = _solve_rows(branch, loc, ctx, pc, kappa_m, d_fix, np.array([kappa_m]))
         return branch, loc, x, k, None
     path = _pinning_path(slip, ctx, kappa_m, d_fix)
-    al, xs, ks = path
-    if slip == "no-slip":
-        x0 = None  # bracketed in t
-    else:
-        x0 = np.array([xs[-1]])
-    x, k = solve_state(branch, loc, ctx, d_fix=d_fix, kappa0=np.array([ks[-1]]), x0=x0)
-    return branch, loc, x, k, (np.append(al, float(np.real(
-        evaluate(branch, x, k, loc, ctx)["alpha"][0]))), np.append(xs, np.nan if x is None else x[0]),
-        np.append(ks, k[0]))
+    return branch, loc, np.array([path[1][-1]]), np.array([path[2][-1]]), path
 
 
 def _pinning_path(slip, ctx, kappa_m, d_fix, max_steps=400):
-    """Pressure control: follow pinning from alpha = 0 until G = w is near (adaptive steps).
+    """Pressure control: follow pinning from its start to the onset by continuation.
 
-    Each state starts from a linear extrapolation of the last two; a failed or out-of-domain step is
-    halved. Returns arrays (alpha, x, kappa) of the pinned states, the last one just before onset.
+    The locator (G for no slip, alpha for frictionless) advances in adaptive steps; each state starts
+    from a linear extrapolation of the last two; a failed or out-of-domain step is halved. The last
+    point is the onset itself. Returns arrays (locator, x, kappa).
     """
     pin = BRANCHES[("pinning", slip)]
-    alpha_w = float(delamination.frictionless_angle(ctx.w))
-    x0 = 1.0 if slip == "no-slip" else ctx.a_m
-    al, xs, ks = [0.0], [x0], [kappa_m]
-    h = 0.05
+    end = _pin_end(slip, ctx)
+    ls, xs, ks = [0.0], [1.0 if slip == "no-slip" else ctx.a_m], [kappa_m]
+    h = end / 16.0
     for _ in range(max_steps):
-        a_new = al[-1] + h
-        if slip == "frictionless" and a_new >= alpha_w * (1 - 1e-6):
-            break
-        if len(al) > 1:
-            s = (a_new - al[-1]) / (al[-1] - al[-2])
+        l_new = min(ls[-1] + h, end)
+        if len(ls) > 1:
+            s = (l_new - ls[-1]) / (ls[-1] - ls[-2])
             xg, kg = xs[-1] + s * (xs[-1] - xs[-2]), ks[-1] + s * (ks[-1] - ks[-2])
         else:
             xg, kg = xs[-1], ks[-1]
         try:
-            x, k = solve_state(pin, np.array([a_new]), ctx, d_fix=d_fix, kappa0=np.array([kg]),
-                               x0=None if slip == "no-slip" else np.array([xg]))
-            st = evaluate(pin, x, k, np.array([a_new]), ctx)
-            good = bool(st["ok"][0]) and np.isfinite(np.real(st["f"][0]))
+            x, k = solve_state(pin, np.array([l_new]), ctx, d_fix=d_fix, kappa0=np.array([kg]),
+                               x0=np.array([xg]))
+            st = evaluate(pin, x, k, np.array([l_new]), ctx)
+            good = bool(st["ok"][0]) and bool(np.isfinite(np.real(st["f"][0])))
         except ConvergenceError:
             good = False
         if not good:
             h *= 0.5
-            if h < 1e-7:
-                if slip == "no-slip" and len(al) > 1:
-                    break  # G -> w: the t-bracket of G <= w closes; solve the onset from here
-                raise ConvergenceError("pressure-control pinning: continuation stalled",
-                                       {"alpha": al[-1], "kappa": ks[-1], "d": d_fix, "w": ctx.w})
+            if h < 1e-9 * end:
+                raise ConvergenceError("pressure-control pinning: continuation stalled (the state "
+                                       "leaves the model's domain before delamination starts)",
+                                       {"locator": ls[-1], "kappa": ks[-1], "d": d_fix, "w": ctx.w})
             continue
-        G = float(np.real(st["G"][0]))
-        if slip == "no-slip" and G >= ctx.w:
-            if h < 1e-4:
-                break
-            h *= 0.25  # overshot the onset: approach it more slowly
-            continue
-        al.append(a_new)
+        ls.append(l_new)
         xs.append(float(x[0]))
         ks.append(float(k[0]))
-        h = min(1.6 * h, 0.1)
-        if slip == "no-slip" and G > ctx.w * (1 - 1e-3):
-            break
-    else:
-        raise ConvergenceError("pressure-control pinning: too many continuation steps",
-                               {"alpha": al[-1], "d": d_fix, "w": ctx.w})
-    return np.array(al), np.array(xs), np.array(ks)
+        if l_new >= end:
+            return np.array(ls), np.array(xs), np.array(ks)
+        h = min(1.6 * h, end / 8.0)
+    raise ConvergenceError("pressure-control pinning: too many continuation steps",
+                           {"locator": ls[-1], "d": d_fix, "w": ctx.w})
 
 
 # ----------------------------------------------------------------------------------------------
@@ -350,22 +333,22 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     on_branch, on_loc, on_x, on_k, path = _onset(slip, ctx, pc, kappa_m, d_fix)
     onset = evaluate(on_branch, on_x, on_k, on_loc, ctx)
     check_ok(onset, "onset of delamination", info)
-    alpha_on, a_on, k_on = (float(np.real(onset[k][0])) for k in ("alpha", "a", "p"))
+    a_on, k_on = (float(np.real(onset[k][0])) for k in ("a", "p"))
 
-    # 3. pinning, alpha in (0, alpha_on]: predictors interpolate the two ends
+    # 3. pinning, locator in (0, end]: G (no slip, ~alpha^2 near 0) or alpha (frictionless)
     pin = BRANCHES[("pinning", slip)]
-    al = alpha_on * _cluster(n_pin)[1:]
-    s = al / alpha_on if alpha_on > 0 else al
-    x_guess = None
-    if slip == "frictionless":
-        x_guess = ctx.a_m + (a_on - ctx.a_m) * s
-    k_guess = kappa_m + (k_on - kappa_m) * s
+    end = _pin_end(slip, ctx)
+    u = _cluster(n_pin)[1:]
+    lp = end * (u * u if slip == "no-slip" else u)
     if path is not None:  # pressure control: interpolate the continuation path
-        k_guess = np.interp(al, path[0], path[2])
-        if slip == "frictionless":
-            x_guess = np.interp(al, path[0], path[1])
-    x_pin, k_pin = _solve_rows(pin, al, ctx, pc, kappa_dc, d_fix, k_guess, x_guess)
-    s_pin = evaluate(pin, x_pin, k_pin, al, ctx)
+        k_guess = np.interp(lp, path[0], path[2])
+        x_guess = np.interp(lp, path[0], path[1])
+    else:
+        k_guess = np.full(lp.shape, kappa_m)
+        x_on = float(on_x[0])  # linear in the locator from the start of pinning to the onset
+        x_guess = (1.0 if slip == "no-slip" else ctx.a_m) + (x_on - (1.0 if slip == "no-slip" else ctx.a_m)) * lp / end
+    x_pin, k_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess)
+    s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
     check_ok(s_pin, "pinning", info)
 
     # 4. delamination, a from a_on down to A_END a_m (denser toward detachment)
@@ -379,9 +362,9 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     s_dl = evaluate(dl, x_dl, k_dl, a_dl, ctx)
     check_ok(s_dl, "delamination", info)
 
-    stages = {"pinning": (pin, al, s_pin), "delamination": (dl, a_dl, s_dl)}
+    stages = {"pinning": (pin, lp, s_pin), "delamination": (dl, a_dl, s_dl)}
     extra = _extrema(stages, ctx, pc, kappa_dc, d_fix, onset)
-    cols = _assemble(free, s_mc, s_pin, s_dl, extra, pc, d_fix)
+    cols = _assemble(free, (a_mc, s_mc), (lp, s_pin), (a_dl, s_dl), extra, pc, d_fix)
     summary = _summary(cols, s_mc, onset, extra, pc, d_fix)
     return History(cols, summary, info)
 
@@ -420,15 +403,14 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
     return out
 
 
-def _assemble(free, s_mc, s_pin, s_dl, extra, pc, d_fix):
+def _assemble(free, mc, pin, dl, extra, pc, d_fix):
     """Stack the stages in history order, insert the solved extrema, set ``delta`` and ``stable``."""
     parts = {k: [np.array([free[k]])] for k in _KEYS}
     stage, loc = [np.array(["making_contact"], dtype=object)], [np.array([0.0])]
-    for name, st, key in (("making_contact", s_mc, "a"), ("pinning", s_pin, "alpha"),
-                          ("delamination", s_dl, "a")):
+    for name, (lc, st) in (("making_contact", mc), ("pinning", pin), ("delamination", dl)):
         for k in _KEYS:
             parts[k].append(np.real(st[k]).astype(float) + 0.0)  # + 0.0 turns -0.0 into 0.0
-        loc.append(np.real(st[key]).astype(float))
+        loc.append(np.asarray(lc, float))
         stage.append(np.full(loc[-1].size, name, dtype=object))
     cols = {k: np.concatenate(v) for k, v in parts.items()}
     cols["stage"], locs = np.concatenate(stage), np.concatenate(loc)
@@ -513,21 +495,43 @@ def state_at(control: str, slip: str, stage: str, *, p: float | None = None, d: 
         on = evaluate(ob, ox, okp, ol, ctx)
         k_on = float(np.real(on["p"][0]))
         if stage == "pinning":
-            frac = loc / float(np.real(on["alpha"][0]))
-            kg = kappa_m + (k_on - kappa_m) * frac
-            xg = None
-            if slip == "frictionless":
-                xg = np.array([ctx.a_m + (float(np.real(on["a"][0])) - ctx.a_m) * frac])
-            if path is not None:
-                kg = float(np.interp(loc, path[0], path[2]))
-                if slip == "frictionless":
-                    xg = np.array([float(np.interp(loc, path[0], path[1]))])
-        else:
-            p_cr = float(critical_pressure(d_fix)) if pc else 0.0
-            kg = p_cr + (k_on - p_cr) * (loc / float(np.real(on["a"][0]))) ** 2
-            xg = None
+            alpha_on = float(np.real(on["alpha"][0]))
+            if not 0.0 <= loc <= alpha_on * (1 + 1e-12):
+                raise InputError("alpha", loc, f"in [0, {alpha_on:.10g}] (the onset of delamination)")
+            st = _pinning_at_alpha(branch, min(loc, alpha_on), ctx, pc, kappa, d_fix, kappa_m, on, path)
+            return _finish(st, stage, control, slip, locator, loc, pc, d_fix)
+        p_cr = float(critical_pressure(d_fix)) if pc else 0.0
+        kg = p_cr + (k_on - p_cr) * (loc / float(np.real(on["a"][0]))) ** 2
+        xg = None
         x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([kg]), xg)
         st = evaluate(branch, x, k, np.array([loc]), ctx)
+    return _finish(st, stage, control, slip, locator, loc, pc, d_fix)
+
+
+def _pinning_at_alpha(branch, alpha, ctx, pc, kappa, d_fix, kappa_m, onset, path):
+    """Pinned state at a given contact angle (no slip: the G with that angle, by brentq)."""
+    def at(loc):
+        if path is not None:
+            kg = np.array([np.interp(loc, path[0], path[2])])
+            xg = np.array([np.interp(loc, path[0], path[1])])
+        else:
+            kg, xg = np.array([kappa_m]), None
+            if branch.slip == "frictionless":
+                frac = loc / _pin_end(branch.slip, ctx)
+                xg = np.array([ctx.a_m + (float(np.real(onset["a"][0])) - ctx.a_m) * frac])
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)
+        return evaluate(branch, x, k, np.array([loc]), ctx)
+
+    if branch.slip == "frictionless":
+        return at(alpha)
+    if alpha == 0.0:
+        return at(0.0)
+    G = brentq(lambda g: float(np.real(at(g)["alpha"][0])) - alpha, 0.0, ctx.w,
+               xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    return at(G)
+
+
+def _finish(st, stage, control, slip, locator, loc, pc, d_fix):
     check_ok(st, stage, {"control": control, "slip": slip, locator: loc})
     out = _real(st, 0)
     if pc:

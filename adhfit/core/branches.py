@@ -9,11 +9,16 @@ Under pressure control kappa is a second unknown, solved from the gap condition 
 branch                 locator  unknown x  condition
 =====================  =======  =========  ==============================================
 making_contact         a        --         explicit (eqs. 19, 25, 26)
-pinning, no-slip       alpha    t          J0 = L_m at a = a_m (eqs. 39, 41/42)
+pinning, no-slip       G        t          J0 = L_m at a = a_m (eqs. 39, 41/42, 52)
 pinning, frictionless  alpha    a          J0 = L_m (eq. 57)
 delamination, no-slip  a        t          J0 = L_d(a) (eq. 61), alpha from G = w (eq. 62)
 delamination, frict.   a        --         explicit, alpha = atan sqrt(2w) (eq. 63)
 =====================  =======  =========  ==============================================
+
+No-slip pinning is located by its energy release rate G (0 -> w), not by alpha: at fixed a = a_m the
+state with release rate G is the delamination solve of eq. (62) with w replaced by G, whose residual
+is monotone in t on the bracket where alpha is real; at fixed alpha the material condition can have
+several roots in t near the onset. The onset is simply G = w.
 
 Dimensionless throughout (DESIGN.md A1/B1).
 """
@@ -74,8 +79,9 @@ def _mc(x, kappa, loc, ctx):
 
 def _pin_ns(x, kappa, loc, ctx):
     a = ctx.a_m + 0.0 * x
-    D, C2 = pinning.noslip_constants(kappa, a, ctx.c, loc, x)
-    return a, loc + 0.0 * x, D, C2, pinning.noslip_release_rate(loc, x)
+    alpha = delamination.noslip_angle(x, loc)  # G = loc (eq. 52 solved for alpha)
+    D, C2 = pinning.noslip_constants(kappa, a, ctx.c, alpha, x)
+    return a, alpha, D, C2, loc + 0.0 * x
 
 
 def _pin_fr(x, kappa, loc, ctx):
@@ -104,8 +110,8 @@ BRANCHES: dict[tuple[str, str], Branch] = {
     ("making_contact", "no-slip"): Branch("making_contact", "no-slip", "a", _mc, None, None),
     ("making_contact", "frictionless"): Branch("making_contact", "frictionless", "a", _mc, None, None),
     ("pinning", "no-slip"): Branch(
-        "pinning", "no-slip", "alpha", _pin_ns, lambda loc, ctx: ctx.L_m,
-        lambda kappa, loc, ctx: pinning.noslip_stretch_bracket(loc, ctx.w)),
+        "pinning", "no-slip", "G", _pin_ns, lambda loc, ctx: ctx.L_m,
+        lambda kappa, loc, ctx: delamination.noslip_stretch_bracket(loc)),
     ("pinning", "frictionless"): Branch(
         "pinning", "frictionless", "alpha", _pin_fr, lambda loc, ctx: ctx.L_m,
         lambda kappa, loc, ctx: (1e-9 * ctx.a_m, _a_limit(ctx))),
@@ -141,19 +147,31 @@ def _residual(branch, x, kappa, loc, ctx):
     return evaluate(branch, x, kappa, loc, ctx)["J0"] - branch.target(loc, ctx)
 
 
-def solve_unknown(branch: Branch, kappa, loc, ctx: Context, x0=None) -> np.ndarray | None:
-    """Solve the branch's unknown x at real (kappa, loc); None for explicit branches."""
+def solve_unknown(branch: Branch, kappa, loc, ctx: Context, x0=None, on_fail: str = "raise"):
+    """Solve the branch's unknown x at real (kappa, loc); None for explicit branches.
+
+    ``on_fail="nan"`` marks failed elements NaN instead of raising (see :func:`~.solve.newton`).
+    """
     if branch.target is None:
         return None
     kappa, loc = np.broadcast_arrays(np.asarray(kappa, float), np.asarray(loc, float))
     lo, hi = branch.bracket(kappa, loc, ctx)
     lo, hi = np.broadcast_to(lo, loc.shape), np.broadcast_to(hi, loc.shape)
-    if x0 is None:
-        x0 = 0.5 * (lo + hi)
-    return newton(lambda x: _residual(branch, x, kappa, loc, ctx), x0, lo, hi,
-                  what=f"{branch.stage} ({branch.slip}): {'t' if branch.slip == 'no-slip' else 'a'}"
-                       f" from the material condition",
-                  inputs={"w": ctx.w, "rs": 1 / ctx.c if ctx.c else np.inf, "a_m": ctx.a_m})
+    what = (f"{branch.stage} ({branch.slip}): {'t' if branch.slip == 'no-slip' else 'a'} "
+            f"from the material condition")
+    inputs = {"w": ctx.w, "rs": 1 / ctx.c if ctx.c else np.inf, "a_m": ctx.a_m}
+
+    def resid(x):
+        return _residual(branch, x, kappa, loc, ctx)
+
+    if x0 is not None and np.all(np.isfinite(x0)):
+        # from a continuation predictor: the nearby root, even where a second root has entered the
+        # bracket and removed its sign change; the bracket is the fallback
+        x = newton(resid, x0, on_fail="nan", what=what, inputs=inputs)
+        inside = np.isfinite(x) & (x >= np.minimum(lo, hi)) & (x <= np.maximum(lo, hi))
+        if np.all(inside):
+            return x
+    return newton(resid, 0.5 * (lo + hi), lo, hi, on_fail=on_fail, what=what, inputs=inputs)
 
 
 def _propagate(branch, x, kappa_r, kappa_c, loc_c, ctx):
@@ -179,12 +197,14 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
     if d_fix is None:
         kappa = np.broadcast_to(np.asarray(kappa, float), loc.shape)
         return solve_unknown(branch, kappa, loc, ctx, x0), kappa
-    memo = {}
+    memo = {"x": None if x0 is None else np.broadcast_to(np.asarray(x0, float), loc.shape)}
 
     def gap(kc):
         kr = np.real(kc)
-        x = solve_unknown(branch, kr, loc, ctx, memo.get("x"))
-        memo["x"] = x
+        # a kappa iterate with no inner solution gives NaN, so the outer Newton backs off
+        x = solve_unknown(branch, kr, loc, ctx, memo.get("x"), on_fail="nan")
+        if x is not None and np.all(np.isfinite(x)):
+            memo["x"] = x
         xc = _propagate(branch, x, kr, kc, loc + 0j, ctx)
         return evaluate(branch, xc, kc, loc, ctx)["d"] - d_fix
 

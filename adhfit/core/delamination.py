@@ -23,9 +23,9 @@ def noslip_angle(t, w):
 
 
 def noslip_stretch_bracket(w, margin=1e-12):
-    """The interval of t on which eq. (62) has a real contact angle in [0, pi]."""
-    s = np.sqrt(2.0 * w)
-    return max(1.0 - s, s - 1.0, 0.0) + margin, 1.0 + s - margin
+    """The interval of t on which eq. (62) has a real contact angle in [0, pi] (w may be an array)."""
+    s = np.sqrt(2.0 * np.asarray(w, dtype=float))
+    return np.maximum(np.maximum(1.0 - s, s - 1.0), 0.0) + margin, 1.0 + s - margin
 
 
 def noslip_material(a, a_m, c, L_m):

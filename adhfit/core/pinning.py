@@ -3,7 +3,7 @@
 No slip (3.2.1): the contact radius stays a_m. The unknown is t = lambda1+/lambda2 = T1+/(mu h) =
 sqrt(1 + C2/a^2), the jump of the meridional stretch across the edge (eqs. 32, 51-52): C2 = a^2 (t^2 - 1)
 and eq. (39) times kappa gives D = sin(theta_a) a t - kappa a^2. Working in t rather than C2 keeps the
-unknown O(1) and gives a bracket from G <= w.
+unknown O(1); the pinning states are located by G itself (see ``branches``).
 
 Frictionless (3.2.2): the edge slides; C2 = a^2 tan^2 alpha (eq. 55), D from eq. (56) times kappa, and
 G = tan^2(alpha)/2 (eq. 60). The unknown is the contact radius a (eq. 57).
@@ -15,8 +15,8 @@ import numpy as np
 
 from .membrane import edge_angles, substrate_cos
 
-__all__ = ["noslip_constants", "noslip_release_rate", "noslip_stretch_bracket",
-           "frictionless_constants", "frictionless_release_rate"]
+__all__ = ["noslip_constants", "noslip_release_rate", "frictionless_constants",
+           "frictionless_release_rate"]
 
 
 def noslip_constants(kappa, a, c, alpha, t):
@@ -28,16 +28,6 @@ def noslip_constants(kappa, a, c, alpha, t):
 def noslip_release_rate(alpha, t):
     """G/(mu h) for no slip, eq. (52): t (1 - cos alpha) + (t - 1)^2 / 2."""
     return t * (1.0 - np.cos(alpha)) + 0.5 * (t - 1.0) ** 2
-
-
-def noslip_stretch_bracket(alpha, w, margin=1e-9):
-    """Values of t between which G(alpha, t) <= w, widened by ``margin`` (eq. 52 solved for t).
-
-    While the edge is pinned G <= w, so the solution lies inside: t = cos(alpha) -/+ sqrt(2w - sin^2 alpha).
-    """
-    disc = np.sqrt(np.maximum(2.0 * w - np.sin(alpha) ** 2, 0.0))
-    ca = np.cos(alpha)
-    return np.maximum(ca - disc - margin, 1e-12), ca + disc + margin
 
 
 def frictionless_constants(kappa, a, c, alpha):

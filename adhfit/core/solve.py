@@ -29,7 +29,7 @@ def _eval(residual, x):
 
 def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *,
            xtol: float = 4e-15, maxiter: int = 60, what: str = "root solve",
-           inputs: dict | None = None) -> np.ndarray:
+           inputs: dict | None = None, on_fail: str = "raise") -> np.ndarray:
     """Solve ``residual(x) = 0`` elementwise by Newton's method with a bisection safeguard.
 
     Parameters
@@ -48,6 +48,9 @@ def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *
         Iteration cap.
     what, inputs :
         Carried by :class:`~adhfit.errors.ConvergenceError` when a solve fails.
+    on_fail : {"raise", "nan"}
+        ``"nan"`` returns NaN for the elements that fail instead of raising: an outer solve then
+        backs off from the parameter values that caused it.
 
     Returns
     -------
@@ -69,20 +72,23 @@ def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *
         both, _ = _eval(lambda z: residual(z.reshape((2,) + shape)).reshape(-1),
                         np.concatenate([lo, hi]))
         rlo, rhi = both[: x.size], both[x.size:]
-        bad = ~(np.isfinite(rlo) & np.isfinite(rhi)) | (np.sign(rlo) * np.sign(rhi) > 0)
-        if np.any(bad):
+        bad = ~np.isfinite(rlo) | (np.sign(rlo) * np.sign(rhi) > 0)
+        failed = bad.copy()
+        if np.any(bad) and on_fail == "raise":
             i = int(np.flatnonzero(bad)[0])
             raise ConvergenceError(f"{what}: no sign change on the bracket",
                                    {**(inputs or {}), "index": i, "lo": lo[i], "hi": hi[i],
                                     "r_lo": rlo[i], "r_hi": rhi[i]})
         neg_at_lo = rlo < 0
         x = np.clip(x, np.minimum(lo, hi), np.maximum(lo, hi))
-    active = np.ones(x.size, dtype=bool)
+    else:
+        failed = np.zeros(x.size, dtype=bool)
+    active = ~failed
     last_good = x.copy()
     for _ in range(maxiter):
         idx = np.flatnonzero(active)
         if idx.size == 0:
-            return x.reshape(shape)
+            return np.where(failed, np.nan, x).reshape(shape)
         xa = x[idx]
         full = x.copy()
 
@@ -115,6 +121,8 @@ def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *
             done = good & ((r == 0) | (np.abs(step) <= xtol * (1 + np.abs(xa))))
         x[idx] = xn
         active[idx[done]] = False
+    if np.any(active) and on_fail == "nan":
+        return np.where(failed | active, np.nan, x).reshape(shape)
     if np.any(active):
         i = int(np.flatnonzero(active)[0])
         raise ConvergenceError(f"{what}: no convergence in {maxiter} iterations",
