@@ -28,6 +28,7 @@ import math
 import os
 import platform
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -56,12 +57,25 @@ POINTS = (50, 200, 1000)
 HEADLINE = "displacement / frictionless / rs=0.5"
 
 
+def engine_revision() -> str:
+    """Commit of the working tree, with '+dirty' when adhfit/ has uncommitted changes."""
+    def git(*args: str) -> str:
+        try:
+            return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                                  timeout=10).stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            return ""
+    head = git("rev-parse", "--short", "HEAD") or "unknown"
+    return head + ("+dirty" if git("status", "--porcelain", "--", "adhfit") else "")
+
+
 def machine_info() -> dict:
     import pandas
     import scipy
     return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
-            "pandas": pandas.__version__, "adhfit": adhfit.__version__, "nproc": os.cpu_count(),
-            "platform": platform.platform(), "processor": platform.processor() or platform.machine()}
+            "pandas": pandas.__version__, "adhfit": f"{adhfit.__version__} ({engine_revision()})",
+            "nproc": os.cpu_count(), "platform": platform.platform(),
+            "processor": platform.processor() or platform.machine()}
 
 
 def timed(fun: Callable[[], object], repeat: int) -> dict:

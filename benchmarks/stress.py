@@ -38,6 +38,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from adhfit.errors import InputError  # noqa: E402
 from adhfit.params import DIMENSIONLESS as T, check_scene  # noqa: E402
@@ -192,6 +193,50 @@ def run_one(scene: dict) -> dict:
     return {"kind": "success", "time": elapsed, "rows": len(frame)}
 
 
+def _baseline_scene(scene: dict) -> tuple[str, str, dict]:
+    kw = {k: v for k, v in scene.items() if k not in ("control", "slip", "lambda0")}
+    return scene["control"], scene["slip"], kw
+
+
+def run_crosscheck(scene: dict) -> dict:
+    """Does the scipy quad baseline solve a scene the engine failed on?  (worker side)"""
+    import baseline_quad
+
+    control, slip, kw = _baseline_scene(scene)
+    t0 = time.perf_counter()
+    try:
+        h = baseline_quad.history(control, slip, points=POINTS, **kw)
+    except Exception as e:  # noqa: BLE001
+        return _outcome("baseline_failed", t0, f"{type(e).__name__}: {e}")
+    i = int(np.argmin(h["f"]))
+    return {"kind": "baseline_solved", "time": time.perf_counter() - t0,
+            "detail": f"f_max {h['f'][h['stage'] == 'making_contact'][-1]:.10g}, least row f {h['f'][i]:.10g} "
+                      f"({h['stage'][i]}, a {h['a'][i]:.6g}, alpha {h['alpha'][i]:.6g}, p {h['p'][i]:.6g})"}
+
+
+def run_compare(scene: dict) -> dict:
+    """Engine and baseline on the engine's own rows: max |Δf|, |Δdelta|, |Δp|, |Δa|  (worker side)."""
+    import adhfit
+    import baseline_quad
+
+    control, slip, kw = _baseline_scene(scene)
+    t0 = time.perf_counter()
+    fr = adhfit.simulate(**scene, points=POINTS).frame
+    st = fr["stage"].to_numpy()
+    loc = {"making_contact": fr["a"].to_numpy()[st == "making_contact"],
+           "pinning": fr["alpha"].to_numpy()[st == "pinning"],
+           "delamination": fr["a"].to_numpy()[st == "delamination"]}
+    try:
+        h = baseline_quad.history(control, slip, locators=loc, **kw)
+    except Exception as e:  # noqa: BLE001
+        return _outcome("baseline_failed", t0, f"{type(e).__name__}: {e}")
+    diff = {k: float(np.nanmax(np.abs(h[k] - fr[k].to_numpy(dtype=float)))) for k in ("f", "delta", "p", "a")}
+    return {"kind": "compared", "time": time.perf_counter() - t0, "max_abs_diff": diff}
+
+
+TASKS = {"engine": run_one, "crosscheck": run_crosscheck, "compare": run_compare}
+
+
 def _outcome(kind: str, t0: float, detail: str) -> dict:
     return {"kind": kind, "time": time.perf_counter() - t0, "detail": detail[:500]}
 
@@ -204,8 +249,8 @@ def _worker(conn) -> None:
         msg = conn.recv()
         if msg is None:
             return
-        idx, scene = msg
-        conn.send((idx, run_one(scene)))
+        idx, task, scene = msg
+        conn.send((idx, TASKS[task](scene)))
 
 
 class _Slot:
@@ -223,9 +268,9 @@ class _Slot:
         self.task: int | None = None
         self.t0 = 0.0
 
-    def submit(self, idx: int, scene: dict) -> None:
+    def submit(self, idx: int, task: str, scene: dict) -> None:
         self.task, self.t0 = idx, time.perf_counter()
-        self.conn.send((idx, scene))
+        self.conn.send((idx, task, scene))
 
     def kill(self) -> None:
         self.proc.kill()          # only this worker, by its own handle
@@ -233,8 +278,9 @@ class _Slot:
         self.conn.close()
 
 
-def run_all(scenes: list[dict], workers: int, timeout: float, progress: bool = True) -> list[dict]:
-    """Outcome of every scene, in order."""
+def run_all(scenes: list[dict], workers: int, timeout: float, progress: bool = True,
+            task: str = "engine") -> list[dict]:
+    """Outcome of ``TASKS[task]`` on every scene, in order."""
     ctx = mp.get_context("fork")
     slots = [_Slot(ctx) for _ in range(workers)]
     out: list[dict | None] = [None] * len(scenes)
@@ -244,7 +290,7 @@ def run_all(scenes: list[dict], workers: int, timeout: float, progress: bool = T
         for s in slots:
             if s.task is None and todo:
                 i = todo.pop()
-                s.submit(i, scenes[i])
+                s.submit(i, task, scenes[i])
         busy = {s.conn: s for s in slots if s.task is not None}
         for conn in wait(list(busy), timeout=0.2):
             s = busy[conn]
@@ -309,10 +355,9 @@ def summarize(scenes: list[dict], outcomes: list[dict], args: argparse.Namespace
 
 
 def machine_info() -> dict:
-    import numpy
-    import scipy
-    return {"python": platform.python_version(), "numpy": numpy.__version__, "scipy": scipy.__version__,
-            "nproc": os.cpu_count(), "platform": platform.platform()}
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_time import machine_info as info
+    return info()
 
 
 def write_markdown(rep: dict, path: Path) -> None:
@@ -332,6 +377,24 @@ def write_markdown(rep: dict, path: Path) -> None:
               "| group | " + " | ".join(KINDS) + " |", "|---|" + "---:|" * len(KINDS)]
     for g, c in rep["by_group"].items():
         lines.append(f"| {g} | " + " | ".join(str(c.get(k, 0)) for k in KINDS) + " |")
+    if "crosscheck" in rep:
+        lines += ["", "## Kept failures re-run through the scipy quad baseline (a_max scenes)", "",
+                  "A failing scene the baseline solves is an engine failure, not the model's domain limit.", "",
+                  "| engine outcome | baseline solved | baseline failed too |", "|---|---:|---:|"]
+        for kind, c in rep["crosscheck"].items():
+            lines.append(f"| {kind} | {c.get('baseline_solved', 0)} | {c.get('baseline_failed', 0)} |")
+    if "compare" in rep:
+        c = rep["compare"]
+        lines += ["", f"## Engine vs baseline on the engine's rows ({c['compared']} of {c['n']} solved scenes)",
+                  "", "| quantity | median of max abs diff | 99th percentile | max |", "|---|---:|---:|---:|"]
+        for key in ("f", "delta", "p", "a"):
+            if c[key]:
+                lines.append(f"| {key} | {c[key]['median']:.1e} | {c[key]['p99']:.1e} | {c[key]['max']:.1e} |")
+        if c["worst_f"]:
+            w = c["worst_f"][0]
+            lines += ["", f"Worst |Δf|: `{json.dumps(w['scene'])}`: {w['max_abs_diff']}"]
+        if c["baseline_failed"]:
+            lines += [f"Baseline failed on {len(c['baseline_failed'])} of these scenes (see stress.json)."]
     lines += ["", "## First failing inputs of each kind (all kept ones are in stress.json)", ""]
     for kind, items in rep["failures"].items():
         if not items:
@@ -339,9 +402,48 @@ def write_markdown(rep: dict, path: Path) -> None:
         lines.append(f"### {kind} ({rep['counts'][kind]})")
         lines.append("")
         for it in items[:5]:
-            lines.append(f"- `{json.dumps(it['scene'])}`: {it['detail']}")
+            b = it.get("baseline")
+            extra = f" — baseline: {b['kind']} ({b['detail']})" if b else ""
+            lines.append(f"- `{json.dumps(it['scene'])}`: {it['detail']}{extra}")
         lines.append("")
     path.write_text("\n".join(lines) + "\n")
+
+
+def crosscheck(rep: dict, args: argparse.Namespace) -> None:
+    """Run the scipy baseline on every kept failing a_max scene; annotate the failures in place."""
+    items = [it for kind, lst in rep["failures"].items() if kind != "input_error" for it in lst
+             if "a_max" in it["scene"]]
+    scenes = [{k: (math.inf if v == "inf" else v) for k, v in it["scene"].items()} for it in items]
+    print(f"crosscheck: baseline on {len(scenes)} failing scenes", file=sys.stderr, flush=True)
+    res = run_all(scenes, args.workers, args.timeout, progress=False, task="crosscheck")
+    counts: dict[str, Counter] = {}
+    for it, r in zip(items, res):
+        it["baseline"] = {"kind": r["kind"], "detail": r.get("detail"), "time_s": round(r["time"], 4)}
+    for kind, lst in rep["failures"].items():
+        c = Counter(it["baseline"]["kind"] for it in lst if "baseline" in it)
+        if c:
+            counts[kind] = c
+    rep["crosscheck"] = {k: dict(v) for k, v in counts.items()}
+
+
+def compare(scenes: list[dict], outcomes: list[dict], args: argparse.Namespace) -> dict:
+    """Engine vs baseline on the engine's rows for the first ``--compare`` successful a_max scenes."""
+    idx = [i for i, o in enumerate(outcomes) if o["kind"] == "success" and "a_max" in scenes[i]][:args.compare]
+    print(f"compare: engine vs baseline on {len(idx)} solved scenes", file=sys.stderr, flush=True)
+    res = run_all([scenes[i] for i in idx], args.workers, args.timeout, progress=False, task="compare")
+    ok = [(i, r) for i, r in zip(idx, res) if r["kind"] == "compared"]
+    out = {"n": len(idx), "compared": len(ok),
+           "baseline_failed": [{"index": i, "scene": _jsonable(scenes[i]), "detail": r.get("detail")}
+                               for i, r in zip(idx, res) if r["kind"] != "compared"][:KEEP]}
+    for key in ("f", "delta", "p", "a"):
+        v = np.array([r["max_abs_diff"][key] for _, r in ok])
+        v = v[np.isfinite(v)]
+        out[key] = {"median": float(np.median(v)), "p99": float(np.percentile(v, 99)), "max": float(v.max())} \
+            if v.size else None
+    worst = sorted(ok, key=lambda t: -np.nan_to_num(t[1]["max_abs_diff"]["f"], nan=np.inf))[:10]
+    out["worst_f"] = [{"index": i, "scene": _jsonable(scenes[i]), "max_abs_diff": r["max_abs_diff"]}
+                      for i, r in worst]
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -352,6 +454,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--other-ends", type=float, default=0.1,
                     help="fraction of scenes ending at delta_max/p_max instead of a_max")
+    ap.add_argument("--no-crosscheck", dest="crosscheck", action="store_false",
+                    help="skip re-running the kept failing scenes through benchmarks/baseline_quad.py")
+    ap.add_argument("--compare", type=int, default=300,
+                    help="engine vs baseline on the rows of this many solved scenes (0: skip)")
     ap.add_argument("--out", type=Path, default=RESULTS)
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
@@ -359,6 +465,10 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     outcomes = run_all(scenes, args.workers, args.timeout)
     rep = summarize(scenes, outcomes, args, time.perf_counter() - t0)
+    if args.crosscheck:
+        crosscheck(rep, args)
+    if args.compare:
+        rep["compare"] = compare(scenes, outcomes, args)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "stress.json").write_text(json.dumps(rep, indent=1) + "\n")
     write_markdown(rep, args.out / "stress.md")
