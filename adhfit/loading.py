@@ -155,24 +155,36 @@ def _split(points):
 # solving rows on a branch
 
 
-def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None):
-    """Solve many states of one branch at once; on failure fall back to sequential continuation."""
+def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, start=None):
+    """Solve many states of one branch at once; on failure fall back to continuation.
+
+    ``start`` = (locator, x, kappa) of a solved state of the branch, from which pressure control
+    follows the branch through the rows if the vectorised solve fails.
+    """
     try:
-        return solve_state(branch, locs, ctx, kappa=None if pc else kappa, d_fix=d_fix if pc else None,
+        x, k = solve_state(branch, locs, ctx, kappa=None if pc else kappa, d_fix=d_fix if pc else None,
                            kappa0=kappa_guess, x0=x_guess)
+        st = evaluate(branch, x, k, locs, ctx)
+        if np.all(st["ok"]) and np.all(np.isfinite(np.real(st["f"]))):
+            return x, k
+        if locs.size == 1 and start is None:
+            return x, k  # the caller's check_ok names the failure
     except ConvergenceError:
-        if locs.size == 1:
+        if locs.size == 1 and start is None:
             raise
-    # sequential continuation: each state starts from its predecessor
+    if pc and start is not None:
+        # follow the branch through the rows themselves, from a solved state
+        l0, x0, k0 = start
+        (_, xs, ks), _ = _follow(branch, l0, locs, x0, k0, ctx, d_fix, log=branch.locator == "a")
+        return (None if branch.target is None else xs), ks
+    # displacement control: each row starts from its predecessor
     xs, ks = np.empty(locs.shape), np.empty(locs.shape)
-    k_prev = np.atleast_1d(kappa_guess)[0] if pc else kappa
     x_prev = None
     for i, loc in enumerate(locs):
-        x, k = solve_state(branch, np.array([loc]), ctx, kappa=None if pc else kappa,
-                           d_fix=d_fix if pc else None, kappa0=np.array([k_prev]), x0=x_prev)
+        x, k = solve_state(branch, np.array([loc]), ctx, kappa=kappa, x0=x_prev)
         xs[i] = np.nan if x is None else x[0]
         ks[i] = k[0]
-        k_prev, x_prev = k[0], x
+        x_prev = x
     return (None if branch.target is None else xs), ks
 
 
@@ -202,56 +214,88 @@ def _onset(slip, ctx, pc, kappa_m, d_fix):
     return branch, loc, np.array([path[1][-1]]), np.array([path[2][-1]]), path
 
 
-def _pinning_path(slip, ctx, kappa_m, d_fix, max_steps=400):
-    """Pressure control: follow pinning from its start to the onset by continuation.
-
-    The locator (G for no slip, alpha for frictionless) advances in adaptive steps; each state starts
-    from a linear extrapolation of the last two; a failed or out-of-domain step is halved. The last
-    point is the onset itself. Returns arrays (locator, x, kappa).
-    """
+def _pinning_path(slip, ctx, kappa_m, d_fix):
+    """Pressure control: pinning from its start (locator 0) to the onset, by continuation."""
+    x0 = 1.0 if slip == "no-slip" else ctx.a_m
     pin = BRANCHES[("pinning", slip)]
     end = _pin_end(slip, ctx)
-    ls, xs, ks = [0.0], [1.0 if slip == "no-slip" else ctx.a_m], [kappa_m]
-    h = end / 16.0
-    for _ in range(max_steps):
-        l_new = min(ls[-1] + h, end)
-        if len(ls) > 1:
-            s = (l_new - ls[-1]) / (ls[-1] - ls[-2])
-            xg, kg = xs[-1] + s * (xs[-1] - xs[-2]), ks[-1] + s * (ks[-1] - ks[-2])
+    # a coarse path of predictors; its last point is the onset
+    return _follow(pin, 0.0, np.array([end]), x0, kappa_m, ctx, d_fix, log=False)[1]
+
+
+def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
+    """Follow a branch under pressure control from locator l0 (solved: x0, k0) through ``targets``.
+
+    Steps are taken in the locator (``log=False``) or in its logarithm (``log=True``, for the contact
+    radius on the way to detachment) and land exactly on every target; each state starts from a linear
+    extrapolation of the last two; a failed or out-of-domain step is halved.
+
+    Returns
+    -------
+    at_targets, path : tuple of ndarray
+        (locators, x, kappa) at the targets, in order, and at every accepted step (predictors for
+        later solves); x is NaN on explicit branches.
+    """
+    fwd, back = (np.log, np.exp) if log else ((lambda z: z), (lambda z: z))
+    targets = np.atleast_1d(np.asarray(targets, float))
+    ss = [fwd(l0)]
+    xs, ks = [np.nan if x0 is None else float(x0)], [float(k0)]
+    span = abs(fwd(targets[-1]) - ss[0]) or 1.0
+    h = span / 16.0
+    out, i, steps = [], 0, 0
+    while i < targets.size:
+        steps += 1
+        if steps > max_steps:
+            raise ConvergenceError(f"pressure-control {branch.stage}: too many continuation steps",
+                                   {"locator": float(back(ss[-1])), "d": d_fix, "w": ctx.w})
+        goal = fwd(targets[i])
+        gap_ = goal - ss[-1]
+        s_new = goal if abs(gap_) <= h else ss[-1] + np.sign(gap_) * h
+        if len(ss) > 1 and ss[-1] != ss[-2]:
+            r = (s_new - ss[-1]) / (ss[-1] - ss[-2])
+            xg, kg = xs[-1] + r * (xs[-1] - xs[-2]), ks[-1] + r * (ks[-1] - ks[-2])
         else:
             xg, kg = xs[-1], ks[-1]
+        loc = np.array([back(s_new)])
         try:
-            x, k = solve_state(pin, np.array([l_new]), ctx, d_fix=d_fix, kappa0=np.array([kg]),
-                               x0=np.array([xg]))
-            st = evaluate(pin, x, k, np.array([l_new]), ctx)
+            x, k = solve_state(branch, loc, ctx, d_fix=d_fix, kappa0=np.array([kg]),
+                               x0=None if branch.target is None else np.array([xg]))
+            st = evaluate(branch, x, k, loc, ctx)
             good = bool(st["ok"][0]) and bool(np.isfinite(np.real(st["f"][0])))
         except ConvergenceError:
             good = False
         if not good:
             h *= 0.5
-            if h < 1e-9 * end:
-                raise ConvergenceError("pressure-control pinning: continuation stalled (the state "
-                                       "leaves the model's domain before delamination starts)",
-                                       {"locator": ls[-1], "kappa": ks[-1], "d": d_fix, "w": ctx.w})
+            if h < 1e-10 * span:
+                raise ConvergenceError(f"pressure-control {branch.stage} ({branch.slip}): continuation "
+                                       f"stalled (the state leaves the model's domain)",
+                                       {"locator": float(back(ss[-1])), "kappa": ks[-1], "d": d_fix,
+                                        "w": ctx.w})
             continue
-        ls.append(l_new)
-        xs.append(float(x[0]))
+        ss.append(s_new)
+        xs.append(np.nan if x is None else float(x[0]))
         ks.append(float(k[0]))
-        if l_new >= end:
-            return np.array(ls), np.array(xs), np.array(ks)
-        h = min(1.6 * h, end / 8.0)
-    raise ConvergenceError("pressure-control pinning: too many continuation steps",
-                           {"locator": ls[-1], "d": d_fix, "w": ctx.w})
+        if s_new == goal:
+            out.append((targets[i], xs[-1], ks[-1]))
+            i += 1
+        h = min(1.6 * h, span / 8.0)
+    path = (back(np.array(ss)), np.array(xs), np.array(ks))
+    return tuple(np.array(v) for v in zip(*out)), path
 
 
 # ----------------------------------------------------------------------------------------------
 # extrema
 
 
-def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, k_guess):
-    """Locator in [lo, hi] where ``key`` (or kappa) is extremal: brentq on its exact derivative."""
+def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, k_guess, x_guess):
+    """Locator in [lo, hi] where ``key`` (or kappa) is extremal: brentq on its exact derivative.
+
+    ``k_guess``, ``x_guess``: the solved state of the best row, the predictor of every solve here.
+    """
+    xg = None if x_guess is None else np.array([x_guess])
+
     def solve(loc):
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_guess]))
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_guess]), xg)
         return x, k
 
     def slope(loc):
@@ -347,7 +391,8 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         k_guess = np.full(lp.shape, kappa_m)
         x_on = float(on_x[0])  # linear in the locator from the start of pinning to the onset
         x_guess = (1.0 if slip == "no-slip" else ctx.a_m) + (x_on - (1.0 if slip == "no-slip" else ctx.a_m)) * lp / end
-    x_pin, k_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess)
+    x_pin, k_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
+                               start=(0.0, 1.0 if slip == "no-slip" else ctx.a_m, kappa_m))
     s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
     check_ok(s_pin, "pinning", info)
 
@@ -356,13 +401,21 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     a_end = A_END * ctx.a_m
     u = _cluster(n_del)[1:]
     a_dl = a_end + (a_on - a_end) * (1.0 - u) ** 1.5
-    p_cr = float(critical_pressure(d_fix)) if pc else 0.0
-    k_guess = p_cr + (k_on - p_cr) * (a_dl / a_on) ** 2
-    x_dl, k_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess)
+    x_guess = None
+    k_guess = np.full(a_dl.shape, kappa_dc if not pc else k_on)
+    if pc:
+        x_start = None if dl.target is None else float(on_x[0])
+        dpath = _follow(dl, a_on, np.array([a_end]), x_start, k_on, ctx, d_fix, log=True)[1]
+        order = np.argsort(dpath[0])
+        k_guess = np.interp(a_dl, dpath[0][order], dpath[2][order])
+        if dl.target is not None:
+            x_guess = np.interp(a_dl, dpath[0][order], dpath[1][order])
+    x_dl, k_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
+                             start=(a_on, None if dl.target is None else float(on_x[0]), k_on))
     s_dl = evaluate(dl, x_dl, k_dl, a_dl, ctx)
     check_ok(s_dl, "delamination", info)
 
-    stages = {"pinning": (pin, lp, s_pin), "delamination": (dl, a_dl, s_dl)}
+    stages = {"pinning": (pin, lp, s_pin, x_pin), "delamination": (dl, a_dl, s_dl, x_dl)}
     extra = _extrema(stages, ctx, pc, kappa_dc, d_fix, onset)
     cols = _assemble(free, (a_mc, s_mc), (lp, s_pin), (a_dl, s_dl), extra, pc, d_fix)
     summary = _summary(cols, s_mc, onset, extra, pc, d_fix)
@@ -382,22 +435,23 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
     # concatenated retraction path: onset is the last pinning row / first delamination row
     path = []
     for stage in ("pinning", "delamination"):
-        branch, locs, st = stages[stage]
-        for i in range(locs.size):
+        for i in range(stages[stage][1].size):
             path.append((stage, i))
     for name, key, sign in (("turning_point", "p" if pc else "d", -1.0 if pc else 1.0),
                             ("f_min", "f", -1.0)):
         vals = np.array([sign * np.real(stages[s][2][key][i]) for s, i in path])
         j = int(np.argmax(vals))
         stage, i = path[j]
-        branch, locs, st = stages[stage]
+        branch, locs, st, xs = stages[stage]
+        x_here = None if xs is None else float(xs[i])
         # the extremum lies between the neighbours of the best row on its own branch
         lo = locs[i - 1] if i > 0 else (0.0 if stage == "pinning" else float(np.real(onset["a"][0])))
         hi = locs[i + 1] if i + 1 < locs.size else locs[i]
         k_here = float(np.real(st["p"][i]))
         loc = _extremum(branch, min(lo, hi), max(lo, hi), ctx, pc, kappa, d_fix, key,
-                        sign, k_here) if lo != hi else locs[i]
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_here]))
+                        sign, k_here, x_here) if lo != hi else locs[i]
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_here]),
+                           None if x_here is None else np.array([x_here]))
         state = _real(evaluate(branch, x, k, np.array([loc]), ctx), 0)
         out[name] = (stage, float(loc), state)
     return out
