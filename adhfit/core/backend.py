@@ -5,14 +5,16 @@ types of :mod:`.branches` (Branch objects in, dicts of arrays out) and the same 
 they run the numba kernels of :mod:`.compiled` (~50x less overhead per call). numba is imported on
 the first call, not when adhfit is imported.
 
-Backend choice, read at every call: the environment variable ``ADHFIT_BACKEND`` = ``numpy`` selects
-:mod:`.branches`; ``numba`` requires the compiled kernels (ImportError without numba); unset or
-``auto`` uses numba when it is installed and numpy otherwise.
+Backend choice: ``with use("numpy"):`` (or ``"numba"``) selects one explicitly for a block and
+restores the previous choice after it. Otherwise the environment variable ``ADHFIT_BACKEND``, read
+once at the first call, decides: ``numpy`` selects :mod:`.branches`; ``numba`` requires the compiled
+kernels (ImportError without numba); unset or ``auto`` uses numba when it is installed.
 """
 from __future__ import annotations
 
 import math
 import os
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -20,49 +22,71 @@ from ..errors import ConvergenceError
 from . import branches
 from .branches import Branch, Context
 
-__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "active"]
+__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "active", "use", "ENV"]
 
 #: environment variable that selects the backend
 ENV = "ADHFIT_BACKEND"
+_CHOICES = ("auto", "numba", "numpy")
 _KEYS = ("a", "alpha", "p", "d", "f", "G", "J0")
 _CODES = {("making_contact", "no-slip"): 0, ("making_contact", "frictionless"): 0,
           ("pinning", "no-slip"): 1, ("pinning", "frictionless"): 2,
           ("delamination", "no-slip"): 3, ("delamination", "frictionless"): 4}
-_kernels = None       # the compiled module once imported; False when numba is missing
+#: the resolved backend: the compiled module, or None for numpy; unresolved until first use
+_UNSET = object()
+_active = _UNSET
+
+
+def _resolve(choice: str):
+    if choice not in _CHOICES:
+        raise ValueError(f"The '{ENV}' setting must be one of {', '.join(_CHOICES)}. Got {choice!r} instead.")
+    if choice == "numpy":
+        return None
+    try:
+        from . import compiled
+    except ImportError:
+        if choice == "numba":
+            raise
+        return None
+    return compiled
 
 
 def _compiled():
-    """The compiled kernels, or None when the numpy backend is selected or numba is missing."""
-    global _kernels
-    choice = os.environ.get(ENV, "auto")
-    if choice == "numpy":
-        return None
-    if _kernels is None:
-        try:
-            from . import compiled
-        except ImportError:
-            if choice == "numba":
-                raise
-            _kernels = False
-        else:
-            _kernels = compiled
-    elif _kernels is False and choice == "numba":
-        from . import compiled  # noqa: F401  (raises the ImportError)
-    return _kernels or None
+    """The compiled kernels, or None when the numpy backend is in use."""
+    global _active
+    if _active is _UNSET:
+        _active = _resolve(os.environ.get(ENV, "auto").strip().lower() or "auto")
+    return _active
 
 
 def active() -> str:
-    """Name of the backend the next call will use: ``"numba"`` or ``"numpy"``."""
+    """Name of the backend in use: ``"numba"`` or ``"numpy"``."""
     return "numpy" if _compiled() is None else "numba"
+
+
+@contextmanager
+def use(name: str):
+    """Run a block with backend ``name`` ("numba", "numpy" or "auto"); the previous choice is restored."""
+    global _active
+    previous = _active
+    _active = _resolve(name)
+    try:
+        yield
+    finally:
+        _active = previous
+
+
+def _code(branch: Branch) -> int:
+    return _CODES[branch.stage, branch.slip]
 
 
 def _ctx(ctx: Context):
     return float(ctx.c), float(ctx.w), float(ctx.a_m), float(ctx.L_m)
 
 
-def _flat(v, dtype, shape):
-    """``v`` as a contiguous 1-D array of ``dtype`` with the elements of ``shape`` (no copy if it is one)."""
-    a = np.asarray(v, dtype)
+def _flat(a: np.ndarray, dtype, shape) -> np.ndarray:
+    """``a`` as a contiguous 1-D array of ``dtype`` with the elements of ``shape`` (no copy if it is one)."""
+    if a.dtype != dtype:
+        a = a.astype(dtype)
     if a.shape == shape:
         return a.ravel()
     if a.ndim == 0:
@@ -70,19 +94,10 @@ def _flat(v, dtype, shape):
     return np.broadcast_to(a, shape).ravel()
 
 
-def _shape(*vs):
-    shapes = [np.shape(v) for v in vs if v is not None]
-    s = shapes[0]
-    for t in shapes[1:]:
-        if t != s:
-            return np.broadcast_shapes(*shapes)
-    return s
-
-
-def _unflat(out, shape, keys=_KEYS):
+def _unflat(out, shape):
     if out.shape[1:] == shape:
-        return {k: out[i] for i, k in enumerate(keys)}
-    return {k: out[i].reshape(shape) for i, k in enumerate(keys)}
+        return {k: out[i] for i, k in enumerate(_KEYS)}
+    return {k: out[i].reshape(shape) for i, k in enumerate(_KEYS)}
 
 
 def evaluate(branch: Branch, x, kappa, loc, ctx: Context) -> dict:
@@ -94,14 +109,17 @@ def evaluate(branch: Branch, x, kappa, loc, ctx: Context) -> dict:
     K = _compiled()
     if K is None:
         return branches.evaluate(branch, x, kappa, loc, ctx)
-    cplx = np.iscomplexobj(kappa) or np.iscomplexobj(loc) or np.iscomplexobj(x)
-    dtype = np.complex128 if cplx else np.float64
-    shape = _shape(x, kappa, loc)
+    loc, kappa = np.asarray(loc), np.asarray(kappa)
+    x = loc if x is None else np.asarray(x)
+    cplx = loc.dtype.kind == "c" or kappa.dtype.kind == "c" or x.dtype.kind == "c"
+    dtype = np.dtype(np.complex128 if cplx else np.float64)
+    shape = loc.shape
+    if kappa.shape != shape or x.shape != shape:
+        shape = np.broadcast_shapes(x.shape, kappa.shape, shape)
     lf = _flat(loc, dtype, shape)
-    xf = lf if x is None else _flat(x, dtype, shape)
     c, w, a_m, _ = _ctx(ctx)
-    out, ok = K.evaluate_batch(_CODES[branch.stage, branch.slip], xf, _flat(kappa, dtype, shape),
-                               lf, c, w, a_m)
+    out, ok = K.evaluate_batch(_code(branch), lf if x is loc else _flat(x, dtype, shape),
+                               _flat(kappa, dtype, shape), lf, c, w, a_m)
     res = _unflat(out, shape)
     res["ok"] = ok if ok.shape == shape else ok.reshape(shape)
     return res
@@ -139,33 +157,30 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
     Raises
     ------
     ConvergenceError
-        When any row's solve fails, with that row's inputs.
+        When the solve of any row fails, with that row's inputs.
     """
     K = _compiled()
     if K is None:
         return branches.solve_state(branch, loc, ctx, kappa=kappa, d_fix=d_fix, kappa0=kappa0, x0=x0)
     loc = np.asarray(loc, float)
     shape = loc.shape
+    f64 = np.dtype(np.float64)
     implicit = branch.target is not None
     pressure = d_fix is not None
-    if not pressure:
-        kappa = np.broadcast_to(np.asarray(kappa, float), shape)
-        if not implicit:
-            return None, kappa
-        k = kappa.ravel()
-    else:
-        k = _flat(kappa0, np.float64, shape)
+    k = _flat(np.asarray(kappa0 if pressure else kappa, float), f64, shape)
+    if not pressure and not implicit:
+        return None, k.reshape(shape)
     lf = loc.ravel()
-    # as solve_unknown: any non-finite start value sends every row to the middle of its bracket
-    has_x0 = x0 is not None and not pressure and bool(np.all(np.isfinite(x0)))
-    xf = _flat(x0, np.float64, shape) if has_x0 else lf
+    has_x0 = x0 is not None
+    xf = _flat(np.asarray(x0, float), f64, shape) if has_x0 else lf
     c, w, a_m, L_m = _ctx(ctx)
-    xs, ks, status = K.solve_batch(_CODES[branch.stage, branch.slip], pressure, lf, k, xf, has_x0,
-                                   c, w, a_m, L_m, float(d_fix) if pressure else 0.0)
+    xs, ks, status = K.solve_batch(_code(branch), pressure, lf, k, xf, has_x0, c, w, a_m, L_m,
+                                   float(d_fix) if pressure else 0.0)
     if status.any():
         _raise(branch, K, status, lf, k, ctx, pressure, d_fix)
-    xs = xs.reshape(shape) if implicit else None
-    return xs, (ks.reshape(shape) if pressure else kappa)
+    if xs.shape != shape:
+        xs, ks = xs.reshape(shape), ks.reshape(shape)
+    return (xs if implicit else None), ks
 
 
 def derivative(branch: Branch, loc, ctx: Context, x, kappa, *, pressure_control: bool) -> dict:
@@ -179,24 +194,36 @@ def derivative(branch: Branch, loc, ctx: Context, x, kappa, *, pressure_control:
     K = _compiled()
     if K is None:
         return branches.derivative(branch, loc, ctx, x, kappa, pressure_control=pressure_control)
-    shape = _shape(loc, x, kappa)
-    lf = _flat(loc, np.float64, shape)
-    xf = lf if x is None else _flat(np.real(x), np.float64, shape)
+    loc, kappa = np.asarray(loc, float), np.real(kappa)
+    x = loc if x is None else np.real(x)
+    shape = loc.shape
+    if np.shape(kappa) != shape or x.shape != shape:
+        shape = np.broadcast_shapes(x.shape, np.shape(kappa), shape)
+    f64 = np.dtype(np.float64)
+    lf = _flat(loc, f64, shape)
     c, w, a_m, L_m = _ctx(ctx)
-    out = K.derivative_batch(_CODES[branch.stage, branch.slip], bool(pressure_control), lf, xf,
-                             _flat(np.real(kappa), np.float64, shape), c, w, a_m, L_m)
+    out = K.derivative_batch(_code(branch), bool(pressure_control), lf,
+                             lf if x is loc else _flat(x, f64, shape),
+                             _flat(np.asarray(kappa, float), f64, shape), c, w, a_m, L_m)
     return _unflat(out, shape)
 
 
+_CHECKED = ("a", "alpha", "p", "d", "f", "G")
+
+
 def check_ok(state: dict, what: str, inputs: dict) -> None:
-    """Raise ConvergenceError when a solved state is outside the model or not finite."""
+    """Raise ConvergenceError when a solved state is outside the model or not finite.
+
+    Same as :func:`.branches.check_ok`; real 1-D states (the common case) are checked compiled.
+    """
     K = _compiled()
-    if K is None:
+    ok = state["ok"]
+    vals = [state[k] for k in _CHECKED]
+    if (K is None or not isinstance(ok, np.ndarray) or ok.ndim != 1
+            or any(not isinstance(v, np.ndarray) or v.dtype != np.float64 or v.shape != ok.shape
+                   for v in vals)):
         return branches.check_ok(state, what, inputs)
-    ok = np.asarray(state["ok"], bool).ravel()
-    vals = np.stack([np.broadcast_to(np.real(state[k]), state["ok"].shape).ravel()
-                     for k in ("a", "alpha", "p", "d", "f", "G")])
-    i = K.first_bad(ok, vals)
+    i = K.first_bad(ok, *vals)
     if i >= 0:
         raise ConvergenceError(f"{what}: state outside the model's domain (free membrane past "
                                f"vertical at the clamp, or no real solution)",

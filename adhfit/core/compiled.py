@@ -333,13 +333,63 @@ def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
 
 
 @_jit
-def _inner(code, kappa, loc, c, w, a_m, L_m, x0, has_x0):
-    """branches.solve_unknown for one row: the unknown from the material condition."""
-    lo, hi = _bracket(code, loc, c, w, a_m)
-    if not has_x0:
-        x0 = 0.5 * (lo + hi)
-    x, st, _, _ = _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi)
-    return x, st
+def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
+    """solve.newton without a bracket for one row: (x, status); NaN when it does not converge.
+
+    A step that lands on NaN is halved back toward the last good iterate.
+    """
+    kc, lc = complex(kappa, 0.0), complex(loc, 0.0)
+    x = last_good = x0
+    for _ in range(MAXITER):
+        z = _residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
+        r, dr = z.real, z.imag / STEP
+        good = math.isfinite(r) and math.isfinite(dr) and dr != 0
+        if good:
+            last_good = x
+            step = -r / dr
+            xn = x + step
+        else:
+            step = 0.0
+            xn = 0.5 * (x + last_good)
+        done = good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(x)))
+        x = xn
+        if done:
+            return x, OK
+    return math.nan, FAIL_INNER
+
+
+@_jit
+def _inner_rows(code, kappa, loc, c, w, a_m, L_m, x0, has_x0, xs, status):
+    """branches.solve_unknown over all rows, into ``xs`` and ``status`` (NaN and a code on failure).
+
+    From finite start values every row is first solved by unbracketed Newton (the root near a
+    continuation predictor); only if every row then lies inside its bracket is that the answer,
+    otherwise every row is solved again, bracketed, from the middle of its bracket.
+    """
+    n = loc.size
+    if has_x0:
+        for i in range(n):
+            if not math.isfinite(x0[i]):
+                has_x0 = False
+                break
+    if has_x0:
+        inside = True
+        for i in range(n):
+            x, st = _newton_free(code, kappa[i], loc[i], c, w, a_m, L_m, x0[i])
+            lo, hi = _bracket(code, loc[i], c, w, a_m)
+            if not (math.isfinite(x) and min(lo, hi) <= x <= max(lo, hi)):
+                inside = False
+                break
+            xs[i] = x
+            status[i] = OK
+        if inside:
+            return
+    for i in range(n):
+        lo, hi = _bracket(code, loc[i], c, w, a_m)
+        x, st, _, _ = _newton_bracketed(code, kappa[i], loc[i], c, w, a_m, L_m, 0.5 * (lo + hi),
+                                        lo, hi)
+        xs[i] = x
+        status[i] = st
 
 
 @_jit
@@ -351,52 +401,65 @@ def _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m):
 
 
 @_jit
-def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, k0):
-    """branches.solve_state under pressure control for one row: (x, kappa, status).
+def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, xs, status):
+    """branches.solve_state under pressure control, in lock step over the rows as the numpy path.
 
-    Unbracketed Newton on kappa for the gap; the gap's derivative is carried through the inner
-    solve by :func:`_propagate`; a NaN step is halved back toward the last good kappa.
+    Unbracketed Newton on kappa for the gap of every active row; each iterate re-solves the unknown
+    of every row (from the last all-finite inner solution) and carries its derivative through that
+    solve by :func:`_propagate`; an iterate without inner solution gives NaN and the Newton step
+    backs off toward the last good kappa. ``kappa`` holds the start values and is overwritten.
     """
+    n = loc.size
     implicit = _implicit(code)
-    lc = complex(loc, 0.0)
-    x, xm, has_memo = 0.0, 0.0, False
-    kappa, last_good = k0, k0
-    converged = False
+    memo = x0.copy()
+    last_good = kappa.copy()
+    active = np.ones(n, dtype=np.bool_)
+    n_active = n
+    xi = np.empty(n)
+    st_i = np.zeros(n, dtype=np.int64)
     for _ in range(MAXITER):
-        kc = complex(kappa, STEP)
-        xc = 0j
-        if implicit:
-            # an iterate with no inner solution gives NaN, so the Newton below backs off
-            x, st = _inner(code, kappa, loc, c, w, a_m, L_m, xm, has_memo)
-            if st == OK:
-                xm, has_memo = x, True
-            xc = _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m)
-        g = _state(code, xc, kc, lc, c, w, a_m, True)[2] - d_fix
-        r, dr = g.real, g.imag / STEP
-        good = math.isfinite(r) and math.isfinite(dr) and dr != 0
-        if good:
-            last_good = kappa
-            step = -r / dr
-            kn = kappa + step
-        else:
-            step = 0.0
-            kn = 0.5 * (kappa + last_good)
-        done = good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(kappa)))
-        kappa = kn
-        if done:
-            converged = True
+        if n_active == 0:
             break
-    if not converged:
-        return x, kappa, FAIL_OUTER
+        if implicit:
+            _inner_rows(code, kappa, loc, c, w, a_m, L_m, memo, has_x0, xi, st_i)
+            finite = True
+            for i in range(n):
+                if not math.isfinite(xi[i]):
+                    finite = False
+                    break
+            if finite:
+                memo[:] = xi
+                has_x0 = True
+        for i in range(n):
+            if not active[i]:
+                continue
+            kc, lc = complex(kappa[i], STEP), complex(loc[i], 0.0)
+            xc = _propagate(code, xi[i], kappa[i], kc, lc, c, w, a_m, L_m) if implicit else 0j
+            g = _state(code, xc, kc, lc, c, w, a_m, True)[2] - d_fix
+            r, dr = g.real, g.imag / STEP
+            good = math.isfinite(r) and math.isfinite(dr) and dr != 0
+            if good:
+                last_good[i] = kappa[i]
+                step = -r / dr
+                kn = kappa[i] + step
+            else:
+                step = 0.0
+                kn = 0.5 * (kappa[i] + last_good[i])
+            if good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(kappa[i]))):
+                active[i] = False
+                n_active -= 1
+            kappa[i] = kn
+    if n_active > 0:
+        for i in range(n):
+            status[i] = FAIL_OUTER if active[i] else OK
+        return
     if implicit:
-        x, st = _inner(code, kappa, loc, c, w, a_m, L_m, xm, has_memo)
-        return x, kappa, st
-    return x, kappa, OK
+        _inner_rows(code, kappa, loc, c, w, a_m, L_m, memo, has_x0, xs, status)
 
 
 @_jit
 def solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
-    """branches.solve_state row by row.
+    """branches.solve_state over the rows.
 
     Parameters
     ----------
@@ -406,27 +469,23 @@ def solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
         Pressure control (``kappa`` holds the start values, ``d_fix`` the gap) or displacement
         control (``kappa`` holds the fixed pressures).
     loc, kappa, x0 : ndarray of float64
-        Locators, pressures (or start pressures) and start values of the unknown (used where
-        ``has_x0``; else the middle of the bracket).
+        Locators, pressures (or start pressures) and start values of the unknown (used when
+        ``has_x0`` and all finite).
 
     Returns
     -------
     x, kappa : ndarray of float64
     status : ndarray of int64
-        ``OK`` or the ``FAIL_*`` code of the row.
+        ``OK`` or the ``FAIL_*`` code of each row.
     """
     n = loc.size
     xs = np.zeros(n)
-    ks = np.empty(n)
+    ks = kappa.copy()
     status = np.zeros(n, dtype=np.int64)
-    implicit = _implicit(code)
-    for i in range(n):
-        if pressure:
-            xs[i], ks[i], status[i] = _solve_pressure(code, loc[i], c, w, a_m, L_m, d_fix, kappa[i])
-        else:
-            ks[i] = kappa[i]
-            if implicit:
-                xs[i], status[i] = _inner(code, kappa[i], loc[i], c, w, a_m, L_m, x0[i], has_x0)
+    if pressure:
+        _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, ks, x0, has_x0, xs, status)
+    elif _implicit(code):
+        _inner_rows(code, kappa, loc, c, w, a_m, L_m, x0, has_x0, xs, status)
     return xs, ks, status
 
 
@@ -495,12 +554,10 @@ def derivative_batch(code, pressure, loc, x, kappa, c, w, a_m, L_m):
 
 
 @_jit
-def first_bad(ok, vals):
+def first_bad(ok, a, alpha, p, d, f, G):
     """Index of the first state outside the model or with a non-finite observable; -1 if none."""
     for i in range(ok.size):
-        if not ok[i]:
+        if not (ok[i] and math.isfinite(a[i]) and math.isfinite(alpha[i]) and math.isfinite(p[i])
+                and math.isfinite(d[i]) and math.isfinite(f[i]) and math.isfinite(G[i])):
             return i
-        for k in range(vals.shape[0]):
-            if not math.isfinite(vals[k, i].real):
-                return i
     return -1
