@@ -17,7 +17,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .core import delamination
-from .core.branches import BRANCHES, Context, check_ok, derivative, evaluate, solve_state
+from .core.backend import check_ok, derivative, evaluate, solve_state
+from .core.branches import BRANCHES, Context
 from .core.inflation import apex_deflection, critical_pressure
 from .core.solve import newton
 from .errors import ConvergenceError, InputError
