@@ -98,7 +98,13 @@ def engine_table(repeat: int, points: tuple[int, ...]) -> list[dict]:
     rows = []
     for label, control, slip, kw in CASES:
         for n in points:
-            res = adhfit.simulate(control, slip, points=n, **kw)
+            try:
+                res = adhfit.simulate(control, slip, points=n, **kw)
+            except Exception as e:  # noqa: BLE001 - a failing case is reported, not fatal
+                rows.append({"case": label, "points": n, "rows": 0, "error": f"{type(e).__name__}: {e}",
+                             "median_s": math.nan, "min_s": math.nan, "runs_s": []})
+                print(f"  engine {label:40s} points={n:5d}: FAILED {type(e).__name__}", flush=True)
+                continue
             t = timed(lambda: adhfit.simulate(control, slip, points=n, **kw), repeat)
             rows.append({"case": label, "points": n, "rows": len(res.frame), **t})
             print(f"  engine {label:40s} points={n:5d}: median {1e3 * t['median_s']:8.2f} ms", flush=True)
@@ -170,8 +176,15 @@ def write_markdown(rep: dict, path: Path) -> None:
               "| case | points | rows | median (ms) | min (ms) | relative to headline (200 pts) |",
               "|---|---:|---:|---:|---:|---:|"]
     for r in rep["engine"]:
+        if "error" in r:
+            lines.append(f"| {r['case']} | {r['points']} | — | failed | failed | — |")
+            continue
         lines.append(f"| {r['case']} | {r['points']} | {r['rows']} | {1e3 * r['median_s']:.2f} | "
                      f"{1e3 * r['min_s']:.2f} | {r['median_s'] / t0:.2f} |")
+    errors = [r for r in rep["engine"] if "error" in r]
+    if errors:
+        lines += ["", "## Engine failures", ""]
+        lines += [f"- {r['case']}, points={r['points']}: `{r['error']}`" for r in errors]
     path.write_text("\n".join(lines) + "\n")
 
 
