@@ -173,10 +173,11 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
     except ConvergenceError:
         if locs.size == 1 and start is None:
             raise
-    if pc and start is not None:
+    if start is not None:
         # follow the branch through the rows themselves, from a solved state
         l0, x0, k0 = start
-        (_, xs, ks), _ = _follow(branch, l0, locs, x0, k0, ctx, d_fix, log=branch.locator == "a")
+        (_, xs, ks), _ = _follow(branch, l0, locs, x0, k0, ctx, d_fix if pc else None,
+                                 log=branch.locator == "a")
         return (None if branch.target is None else xs), ks
     # displacement control: each row starts from its predecessor
     xs, ks = np.empty(locs.shape), np.empty(locs.shape)
@@ -189,6 +190,11 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
     return (None if branch.target is None else xs), ks
 
 
+def _delamination_start(slip, on_x, onset):
+    """The unknown of the delamination branch at the onset (no slip: the same t as the pinned state)."""
+    return float(on_x[0]) if slip == "no-slip" else None
+
+
 def _pin_end(slip, ctx):
     """Locator of the onset on the pinning branch: G = w (no slip) or alpha = atan sqrt(2w)."""
     return ctx.w if slip == "no-slip" else float(delamination.frictionless_angle(ctx.w))
@@ -197,21 +203,19 @@ def _pin_end(slip, ctx):
 def _onset(slip, ctx, pc, kappa_m, d_fix):
     """The end of pinning, where G first reaches w.
 
-    Displacement control: one bracketed solve. Pressure control: the pressure can fall far below its
-    end-of-loading value before G reaches w (strong adhesion), so the pinning path is followed by
-    continuation from the end of loading.
+    The pinning path is followed by continuation from the end of loading (under pressure control the
+    pressure can also fall far below its end-of-loading value before G reaches w).
 
     Returns
     -------
     branch, loc, x, kappa, path
-        ``path`` = (locators, x, kappa) along pinning under pressure control (predictors), else None.
+        ``path`` = (locators, x, kappa) along pinning (predictors for the rows).
     """
     branch = BRANCHES[("pinning", slip)]
     loc = np.array([_pin_end(slip, ctx)])
-    if not pc:
-        x, k = _solve_rows(branch, loc, ctx, pc, kappa_m, d_fix, np.array([kappa_m]))
-        return branch, loc, x, k, None
-    path = _pinning_path(slip, ctx, kappa_m, d_fix)
+    # the physical state is the one connected to the start of pinning (G = 0, t = 1, a = a_m): at
+    # fixed G the material condition can have a second root, which a bracket alone may pick
+    path = _pinning_path(slip, ctx, kappa_m, d_fix if pc else None)
     return branch, loc, np.array([path[1][-1]]), np.array([path[2][-1]]), path
 
 
@@ -225,7 +229,9 @@ def _pinning_path(slip, ctx, kappa_m, d_fix):
 
 
 def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
-    """Follow a branch under pressure control from locator l0 (solved: x0, k0) through ``targets``.
+    """Follow a branch from locator l0 (solved: x0, k0) through ``targets`` (continuation).
+
+    ``d_fix`` None means displacement control (kappa fixed at k0); else kappa is solved from the gap.
 
     Steps are taken in the locator (``log=False``) or in its logarithm (``log=True``, for the contact
     radius on the way to detachment) and land exactly on every target; each state starts from a linear
@@ -247,7 +253,7 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
     while i < targets.size:
         steps += 1
         if steps > max_steps:
-            raise ConvergenceError(f"pressure-control {branch.stage}: too many continuation steps",
+            raise ConvergenceError(f"{branch.stage} ({branch.slip}): too many continuation steps",
                                    {"locator": float(back(ss[-1])), "d": d_fix, "w": ctx.w})
         goal = fwd(targets[i])
         gap_ = goal - ss[-1]
@@ -259,8 +265,12 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
             xg, kg = xs[-1], ks[-1]
         loc = np.array([back(s_new)])
         try:
-            x, k = solve_state(branch, loc, ctx, d_fix=d_fix, kappa0=np.array([kg]),
-                               x0=None if branch.target is None else np.array([xg]))
+            if d_fix is None:  # displacement control: kappa stays k0
+                x, k = solve_state(branch, loc, ctx, kappa=np.array([k0]),
+                                   x0=None if branch.target is None else np.array([xg]))
+            else:
+                x, k = solve_state(branch, loc, ctx, d_fix=d_fix, kappa0=np.array([kg]),
+                                   x0=None if branch.target is None else np.array([xg]))
             st = evaluate(branch, x, k, loc, ctx)
             good = bool(st["ok"][0]) and bool(np.isfinite(np.real(st["f"][0])))
         except ConvergenceError:
@@ -268,7 +278,7 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
         if not good:
             h *= 0.5
             if h < 1e-10 * span:
-                raise ConvergenceError(f"pressure-control {branch.stage} ({branch.slip}): continuation "
+                raise ConvergenceError(f"{branch.stage} ({branch.slip}): continuation "
                                        f"stalled (the state leaves the model's domain)",
                                        {"locator": float(back(ss[-1])), "kappa": ks[-1], "d": d_fix,
                                         "w": ctx.w})
@@ -385,15 +395,10 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     end = _pin_end(slip, ctx)
     u = _cluster(n_pin)[1:]
     lp = end * (u * u if slip == "no-slip" else u)
-    if path is not None:  # pressure control: interpolate the continuation path
-        k_guess = np.interp(lp, path[0], path[2])
-        x_guess = np.interp(lp, path[0], path[1])
-    else:
-        k_guess = np.full(lp.shape, kappa_m)
-        x_on = float(on_x[0])  # linear in the locator from the start of pinning to the onset
-        x_guess = (1.0 if slip == "no-slip" else ctx.a_m) + (x_on - (1.0 if slip == "no-slip" else ctx.a_m)) * lp / end
+    k_guess = np.interp(lp, path[0], path[2])  # predictors from the continuation path
+    x_guess = np.interp(lp, path[0], path[1])
     x_pin, k_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
-                               start=(0.0, 1.0 if slip == "no-slip" else ctx.a_m, kappa_m))
+                               start=(path[0][0], path[1][0], path[2][0]))
     s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
     check_ok(s_pin, "pinning", info)
 
@@ -402,17 +407,18 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     a_end = A_END * ctx.a_m
     u = _cluster(n_del)[1:]
     a_dl = a_end + (a_on - a_end) * (1.0 - u) ** 1.5
-    x_guess = None
-    k_guess = np.full(a_dl.shape, kappa_dc if not pc else k_on)
-    if pc:
-        x_start = None if dl.target is None else float(on_x[0])
-        dpath = _follow(dl, a_on, np.array([a_end]), x_start, k_on, ctx, d_fix, log=True)[1]
+    x_guess, k_guess = None, np.full(a_dl.shape, k_on)
+    if pc or dl.target is not None:  # explicit in displacement control when frictionless
+        x_start = None if dl.target is None else _delamination_start(slip, on_x, onset)
+        dpath = _follow(dl, a_on, np.array([a_end]), x_start, k_on, ctx, d_fix if pc else None,
+                        log=True)[1]
         order = np.argsort(dpath[0])
         k_guess = np.interp(a_dl, dpath[0][order], dpath[2][order])
         if dl.target is not None:
             x_guess = np.interp(a_dl, dpath[0][order], dpath[1][order])
     x_dl, k_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
-                             start=(a_on, None if dl.target is None else float(on_x[0]), k_on))
+                             start=(a_on, None if dl.target is None else
+                                    _delamination_start(slip, on_x, onset), k_on))
     s_dl = evaluate(dl, x_dl, k_dl, a_dl, ctx)
     check_ok(s_dl, "delamination", info)
 
