@@ -344,7 +344,7 @@ class History:
     """
 
     #: largest continuation step: radians for pinning, ln a otherwise
-    MAX_STEP = {"making_contact": mp.mpf("0.25"), "pinning": mp.mpf("0.1"), "delamination": mp.mpf("0.25")}
+    MAX_STEP = {"making_contact": mp.mpf("0.5"), "pinning": mp.mpf("0.1"), "delamination": mp.mpf("0.25")}
 
     def __init__(self, control, slip, p, d, w, rs, a_max):
         if control not in CONTROLS or slip not in SLIPS:
@@ -361,7 +361,7 @@ class History:
         self.end = self.solve("making_contact", self.a_max)
         self.L_m = self.end.J0
         self._seed_pinning()
-        self.onset = self._find_onset()
+        self._onset = None
 
     # ---- stage equations ----------------------------------------------------------------------
     def _kappa(self, x):
@@ -426,8 +426,8 @@ class History:
                 return sol
         if not self.pressure and (stage == "making_contact" or (stage == "delamination" and not self.no_slip)):
             return self._solve_from(stage, loc, [])[1]  # explicit in a: nothing to continue
-        if not cache:  # pressure-control loading starts at point contact, kappa = p_cr(d)
-            a0 = min(loc, self.a_max / 100)
+        if not cache:  # pressure-control loading starts near point contact, kappa ~ p_cr(d) + O(a**2)
+            a0 = min(loc, self.a_max / 10)
             x, sol = self._solve_from(stage, a0, [p_cr(self.d)])
             cache.append((self._coord(stage, a0), x, sol))
         h = self.MAX_STEP[stage]
@@ -485,6 +485,13 @@ class History:
         self._cache["delamination"].append((mp.log(self.a_max), x, sol))
         self._cache["pinning"].append((sol.alpha, x, sol))
         return sol
+
+    @property
+    def onset(self) -> Solution:
+        """End of pinning (G = w), found on first use: making-contact states do not need it."""
+        if self._onset is None:
+            self._onset = self._find_onset()
+        return self._onset
 
     @property
     def a_onset(self) -> mp.mpf:
