@@ -298,26 +298,41 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
 # extrema
 
 
-def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, k_guess, x_guess):
+def _safe(fun, z):
+    try:
+        return fun(z)
+    except ConvergenceError:
+        return np.nan
+
+
+def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, rows):
     """Locator in [lo, hi] where ``key`` (or kappa) is extremal: brentq on its exact derivative.
 
-    ``k_guess``, ``x_guess``: the solved state of the best row, the predictor of every solve here.
+    ``rows`` = (locators, x, kappa) of solved rows around [lo, hi]: predictors by interpolation.
     """
-    xg = None if x_guess is None else np.array([x_guess])
+    order = np.argsort(rows[0])
+    rl, rx, rk = (np.asarray(r, float)[order] for r in rows)
 
     def solve(loc):
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_guess]), xg)
-        return x, k
+        kg = np.array([np.interp(loc, rl, rk)])
+        xg = None if branch.target is None else np.array([np.interp(loc, rl, rx)])
+        return _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)
 
     def slope(loc):
         x, k = solve(loc)
         return float(derivative(branch, np.array([loc]), ctx, x, k, pressure_control=pc)[key][0])
 
     def value(loc):
-        return sign * float(np.real(evaluate(branch, *solve(loc), np.array([loc]), ctx)[key][0]))
+        try:
+            st = evaluate(branch, *solve(loc), np.array([loc]), ctx)
+        except ConvergenceError:
+            return -np.inf
+        v = sign * float(np.real(st[key][0]))
+        finite = all(np.isfinite(np.real(st[k][0])) for k in _KEYS)
+        return v if (bool(st["ok"][0]) and finite) else -np.inf  # only admissible states compete
 
     candidates = [lo, hi]
-    s_lo, s_hi = slope(lo), slope(hi)
+    s_lo, s_hi = (_safe(slope, z) for z in (lo, hi))
     if np.isfinite(s_lo) and np.isfinite(s_hi) and s_lo * s_hi < 0:
         candidates.append(brentq(slope, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200))
     # the extremum of a smooth function on [lo, hi] is a stationary point or an end
@@ -450,16 +465,21 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
         j = int(np.argmax(vals))
         stage, i = path[j]
         branch, locs, st, xs = stages[stage]
-        x_here = None if xs is None else float(xs[i])
         # the extremum lies between the neighbours of the best row on its own branch
         lo = locs[i - 1] if i > 0 else (0.0 if stage == "pinning" else float(np.real(onset["a"][0])))
         hi = locs[i + 1] if i + 1 < locs.size else locs[i]
-        k_here = float(np.real(st["p"][i]))
+        j0, j1 = max(i - 2, 0), min(i + 3, locs.size)
+        rows = (locs[j0:j1], np.full(j1 - j0, np.nan) if xs is None else xs[j0:j1],
+                np.real(st["p"][j0:j1]))
         loc = _extremum(branch, min(lo, hi), max(lo, hi), ctx, pc, kappa, d_fix, key,
-                        sign, k_here, x_here) if lo != hi else locs[i]
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([k_here]),
-                           None if x_here is None else np.array([x_here]))
-        state = _real(evaluate(branch, x, k, np.array([loc]), ctx), 0)
+                        sign, rows) if lo != hi else locs[i]
+        kg = np.array([np.interp(loc, np.sort(rows[0]), rows[2][np.argsort(rows[0])])])
+        xg = None if xs is None else np.array([np.interp(loc, np.sort(rows[0]),
+                                                          rows[1][np.argsort(rows[0])])])
+        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)
+        solved = evaluate(branch, x, k, np.array([loc]), ctx)
+        check_ok(solved, name.replace("_", " "), {"stage": stage, branch.locator: float(loc)})
+        state = _real(solved, 0)
         out[name] = (stage, float(loc), state)
     return out
 

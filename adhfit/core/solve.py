@@ -88,6 +88,10 @@ def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *
     for _ in range(maxiter):
         idx = np.flatnonzero(active)
         if idx.size == 0:
+            if np.any(failed) and on_fail == "raise":
+                i = int(np.flatnonzero(failed)[0])
+                raise ConvergenceError(f"{what}: the bracket closed on a point outside the domain",
+                                       {**(inputs or {}), "index": i, "x": x[i]})
             return np.where(failed, np.nan, x).reshape(shape)
         xa = x[idx]
         full = x.copy()
@@ -120,6 +124,9 @@ def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *
             xn = np.where(good, xa + step, 0.5 * (xa + last_good[idx]))
             done = good & ((r == 0) | (np.abs(step) <= xtol * (1 + np.abs(xa))))
         x[idx] = xn
+        # a bracket can shrink onto an end where the residual is NaN: that is no root
+        fake = done & bracketed & ~finite
+        failed[idx[fake]] = True
         active[idx[done]] = False
     if np.any(active) and on_fail == "nan":
         return np.where(failed | active, np.nan, x).reshape(shape)
