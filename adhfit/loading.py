@@ -581,11 +581,18 @@ def state_at(control: str, slip: str, stage: str, *, p: float | None = None, d: 
                 raise InputError("alpha", loc, f"in [0, {alpha_on:.10g}] (the onset of delamination)")
             st = _pinning_at_alpha(branch, min(loc, alpha_on), ctx, pc, kappa, d_fix, kappa_m, on, path)
             return _finish(st, stage, control, slip, locator, loc, pc, d_fix)
-        p_cr = float(critical_pressure(d_fix)) if pc else 0.0
-        kg = p_cr + (k_on - p_cr) * (loc / float(np.real(on["a"][0]))) ** 2
-        xg = None
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, np.array([kg]), xg)
-        st = evaluate(branch, x, k, np.array([loc]), ctx)
+        a_on = float(np.real(on["a"][0]))
+        if not 0.0 < loc <= a_on * (1 + 1e-12):
+            raise InputError("a", loc, f"in (0, {a_on:.10g}] (delamination runs from the onset inward)")
+        # follow the branch from the onset, as the history does (selects the physical root)
+        x_on = _delamination_start(slip, ox, on)
+        if loc >= a_on:
+            x, k = (None if x_on is None else np.array([x_on])), np.array([k_on])
+        else:
+            (_, xs, ks), _ = _follow(branch, a_on, np.array([loc]), x_on, k_on, ctx,
+                                     d_fix if pc else None, log=True)
+            x, k = (None if branch.target is None else xs), ks
+        st = evaluate(branch, x, k, np.array([min(loc, a_on)]), ctx)
     return _finish(st, stage, control, slip, locator, loc, pc, d_fix)
 
 
