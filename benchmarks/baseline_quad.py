@@ -215,6 +215,19 @@ def _admissible_start(fun: Callable[[float], float], x0: float, lo: float, hi: f
     raise BaselineError(f"{what}: no admissible point found near x0={x0!r}")
 
 
+def _check_root(fun: Callable[[float], float], x: float, tol: Tol, what: str) -> float:
+    """Reject a "root" where the residual is not small: brentq also converges to a jump.
+
+    Nested solves (pressure control) can make the outer residual jump when the inner solve switches
+    between roots; brentq then returns the jump, silently.  The residuals here (J0 - L, gap - d) are
+    O(1) quantities computed to about quad_tol.
+    """
+    r = fun(x)
+    if not abs(r) <= 1e4 * max(tol.quad, tol.root, 1e-12):
+        raise BaselineError(f"{what}: brentq stopped at x={x!r} with residual {r!r} (a jump, not a root)")
+    return x
+
+
 def solve(fun: Callable[[float], float], x0: float, lo: float, hi: float, step: float, tol: Tol,
           what: str) -> float:
     """Root of ``fun`` near ``x0`` in (lo, hi) with brentq; bracket found by doubling steps outward.
@@ -251,7 +264,11 @@ def solve(fun: Callable[[float], float], x0: float, lo: float, hi: float, step: 
                 continue
             if f_out * f_in <= 0.0:
                 a_, b_ = sorted((x_in, x_out))
-                return optimize.brentq(fun_memo, a_, b_, xtol=tol.root, rtol=max(tol.root, _RTOL_MIN))
+                try:
+                    x = optimize.brentq(fun_memo, a_, b_, xtol=tol.root, rtol=max(tol.root, _RTOL_MIN))
+                except ValueError as e:     # an inadmissible (NaN) point inside the bracket
+                    raise BaselineError(f"{what}: {e}") from e
+                return _check_root(fun_memo, x, tol, what)
             side[0], side[1], side[2] = x_out, f_out, 2.0 * h
     raise BaselineError(f"{what}: no sign change found from x0={x0!r} in ({lo!r}, {hi!r})")
 
@@ -442,9 +459,9 @@ def ns_pinning_state(sc: Scene, alpha: float, p_m: float, big_l: float, c20: flo
         return _ns_state(sc, "pinning", a, alpha, sc.p, ns_pin_c2(alpha, a, sc.p, sc.rs, big_l, c20, sc.tol))
     cache: dict[float, float] = {}
 
-    def gap_at(k: float) -> float:
-        c2 = ns_pin_c2(alpha, a, k, sc.rs, big_l, cache.get("last", c20), sc.tol)
-        cache[k] = cache["last"] = c2
+    def gap_at(k: float) -> float:   # inner solve always starts from the previous row: deterministic
+        c2 = ns_pin_c2(alpha, a, k, sc.rs, big_l, c20, sc.tol)
+        cache[k] = c2
         return gap(a, k, c2, noslip_d(a, alpha, c2, k, sc.rs), sc.rs, sc.tol, turned)
 
     p = _solve_p(sc, gap_at, p_m if p0 is None else p0, "no-slip pinning p")
@@ -476,8 +493,8 @@ def ns_delamination_state(sc: Scene, a: float, big_l_m: float, t0: float | None 
         cache: dict = {}
 
         def gap_at(k: float) -> float:
-            t_ = ns_del_t(a, k, sc.rs, sc.w, big_l, cache.get("last", t_start), sc.tol)
-            cache[k] = cache["last"] = t_
+            t_ = ns_del_t(a, k, sc.rs, sc.w, big_l, t_start, sc.tol)
+            cache[k] = t_
             al = alpha_from_g(t_, sc.w)
             c2 = a * a * (t_ * t_ - 1.0)
             return gap(a, k, c2, noslip_d(a, al, c2, k, sc.rs), sc.rs, sc.tol, _ns_turned(a, al, sc.rs))
