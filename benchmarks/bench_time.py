@@ -65,6 +65,8 @@ def engine_revision() -> str:
                                   timeout=10).stdout.strip()
         except (OSError, subprocess.SubprocessError):
             return ""
+    if os.environ.get("ADHFIT_BENCH_REVISION"):   # set when running from an exported snapshot
+        return os.environ["ADHFIT_BENCH_REVISION"]
     head = git("rev-parse", "--short", "HEAD") or "unknown"
     return head + ("+dirty" if git("status", "--porcelain", "--", "adhfit") else "")
 
