@@ -159,8 +159,7 @@ def test_extrema_are_rows_and_extreme(run):
 
 def test_extrema_are_located_not_picked(run):
     """The extremum is solved between rows (DESIGN.md A2, 'to 1e-8'): its neighbours on both sides in
-    the same stage are no more extreme, and the extremum is not simply a grid row when the branch is
-    smooth there (a refined location is generally off-grid)."""
+    the same stage are no more extreme."""
     control, slip, kw, r = run
     fr, s = r.frame, r.summary
     for key, col in (("f_min", "f"), ("turning_point", "delta" if control == "displacement" else "p")):
