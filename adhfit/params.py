@@ -111,6 +111,14 @@ FITTED: dict[str, Param] = {
     "work_of_adhesion": _p("work_of_adhesion", "W_ad", "J/m^2", None, 0.0, math.inf,
                            "work of adhesion"),
     "mu_h": _p("mu_h", "μh", "N/m", None, 0.0, math.inf, "membrane stiffness (shear modulus x thickness)"),
+    # nuisance parameters of a measured curve (adhfit.fitting): added to the measured values
+    "displacement_offset": _p("displacement_offset", "δ_0", "m", 0.0, -math.inf, math.inf,
+                              "added to the measured displacement (the contact point is never known "
+                              "exactly); fitted by default under displacement control"),
+    "pressure_offset": _p("pressure_offset", "P_0", "Pa", 0.0, -math.inf, math.inf,
+                          "added to the measured pressure (transducer zero); off by default"),
+    "force_offset": _p("force_offset", "F_0", "N", 0.0, -math.inf, math.inf,
+                       "added to the model force (load-cell zero); off by default"),
 }
 
 

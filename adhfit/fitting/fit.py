@@ -1,0 +1,166 @@
+"""``fit_curve``: fit a measured curve under both slip conditions and compare them (DESIGN.md A5).
+
+One call reads the data and the scene (or takes them as objects), fits each slip condition by least
+squares (:mod:`.lsq`), computes intervals (:mod:`.summary`), compares the conditions
+(:mod:`.selection`) and returns a frozen :class:`~.result.FitResult`.  The second condition is also
+started from the first one's optimum (the two optima are usually close).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import platform
+import time
+from pathlib import Path
+
+from ..errors import InputError
+from .model import DEFAULT_POINTS, CurveModel, segment
+from .lsq import fit_slip
+from .result import Estimate, FitResult, SlipFit
+from .selection import compare
+from .summary import summarize
+
+__all__ = ["fit_curve", "METHODS", "SIGMA_ESTIMATED"]
+
+METHODS = ("lsq", "mcmc")
+SLIP_CHOICES = ("auto", "no-slip", "frictionless")
+SIGMA_ESTIMATED = "estimated from the residuals (lmfit scales the covariance by the reduced chi-square)"
+#: w = W_ad/μh within this fraction of the table's upper bound earns a warning
+_W_EDGE = 0.98
+
+
+def _inputs(data, scene):
+    from ..data import read_curve  # noqa: PLC0415
+    from ..scene import Scene, load_scene  # noqa: PLC0415
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    curve = read_curve(data, scene.control) if isinstance(data, (str, Path)) else data
+    if curve.control != scene.control:
+        raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
+    return curve, scene
+
+
+def _check_options(method, slip, sigma, points):
+    if method == "mcmc":
+        raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
+    if method not in METHODS:
+        raise InputError("method", method, "one of 'lsq', 'mcmc'")
+    if slip not in SLIP_CHOICES:
+        raise InputError("slip", slip, "one of " + ", ".join(map(repr, SLIP_CHOICES)))
+    if sigma is not None and not (isinstance(sigma, (int, float)) and math.isfinite(sigma) and sigma > 0):
+        raise InputError("sigma", sigma, "a positive force noise in N")
+    if not (isinstance(points, int) and 40 <= points <= 5000):
+        raise InputError("points", points, "an integer in [40, 5000]")
+
+
+def _reported(fits: dict[str, SlipFit], verdict: dict) -> dict[str, Estimate]:
+    """Estimates of the selected fit; undecided: the favoured fit's, intervals hulled over both."""
+    chosen = fits[verdict["parameters_from"]]
+    if verdict["selected"] is not None or len(fits) == 1:
+        return dict(chosen.parameters)
+    out = {}
+    for name, e in chosen.parameters.items():
+        cis = [f.parameters[name].ci95 for f in fits.values() if name in f.parameters]
+        if any(c is None for c in cis):
+            out[name] = e
+            continue
+        hull = (min(c[0] for c in cis), max(c[1] for c in cis))
+        ses = [f.parameters[name].stderr for f in fits.values() if f.parameters[name].stderr is not None]
+        out[name] = dataclasses.replace(e, ci95=hull, stderr=max(ses) if ses else None,
+                                        ci_method=f"{e.ci_method} (hull over both slip conditions)")
+    return out
+
+
+def _warnings(scene, fits, verdict, curve) -> list[str]:
+    out = list(scene.warnings())
+    rep = fits[verdict["parameters_from"]]
+    out += [f"[{rep.slip}] {w}" for w in rep.warnings]
+    if verdict["selected"] is None and len(fits) > 1:
+        out.append(f"slip condition undecided ({verdict['explanation']}); the estimates are the "
+                   f"{verdict['favoured']} fit's, their 95 % intervals cover both conditions' intervals")
+    w = rep.parameters["work_of_adhesion"].value / rep.parameters["mu_h"].value
+    from ..params import DIMENSIONLESS  # noqa: PLC0415
+    if w > _W_EDGE * DIMENSIONLESS["w"].upper:
+        out.append(f"W_ad/μh = {w:.3g} is at the model's upper bound {DIMENSIONLESS['w'].upper:g}")
+    if any(not f.success for f in fits.values()):
+        out.append("the optimiser did not report convergence for: "
+                   + ", ".join(s for s, f in fits.items() if not f.success))
+    return out
+
+
+def _provenance(curve, scene, seed, method, options) -> dict:
+    import lmfit  # noqa: PLC0415
+    import numpy  # noqa: PLC0415
+    import scipy  # noqa: PLC0415
+    from .. import __version__  # noqa: PLC0415
+    from ..core.backend import active  # noqa: PLC0415
+    fields = {f.name: getattr(scene, f.name) for f in dataclasses.fields(scene) if f.name != "source"}
+    return {"adhfit_version": __version__, "input": curve.path, "input_sha256": curve.sha256,
+            "scene_file": scene.source, "scene": fields, "seed": seed, "method": method, "options": options,
+            "backend": active(), "python": platform.python_version(), "numpy": numpy.__version__,
+            "scipy": scipy.__version__, "lmfit": lmfit.__version__}
+
+
+def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
+              fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
+              points: int = DEFAULT_POINTS, profile: bool = True) -> FitResult:
+    """Fit W_ad, μh and the slip condition to a measured curve.
+
+    Parameters
+    ----------
+    data : path or adhfit.data.Curve
+        The measured curve (CSV, DESIGN.md A4) or a Curve.
+    scene : path or adhfit.scene.Scene
+        The scene (TOML, A3): geometry and the fixed pressure or gap.
+    method : {"lsq", "mcmc"}
+        Only ``"lsq"`` in this version.
+    slip : {"auto", "no-slip", "frictionless"}, optional
+        Default: the scene's ``[interface] slip``.  ``"auto"`` fits both and compares them.
+    sigma : float, optional
+        Force noise σ, N.  Default: estimated from the residuals.
+    fit_x_offset : bool, optional
+        Fit a displacement offset (default under displacement control) or a pressure offset.
+    fit_force_offset : bool
+        Fit a load-cell offset.
+    seed : int, optional
+        Recorded in the provenance (least squares draws no random numbers).
+    points : int
+        Rows per computed history.
+    profile : bool
+        Compute likelihood-profile intervals of W_ad and μh of the reported fit (of both fits when
+        the slip condition is undecided); the other fit's intervals are from its covariance.
+
+    Returns
+    -------
+    FitResult
+    """
+    t0 = time.perf_counter()
+    curve, scene = _inputs(data, scene)
+    slip = scene.slip if slip is None else slip
+    _check_options(method, slip, sigma, points)
+    slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
+    seg = segment(curve)
+    raws = {}
+    for s in slips:
+        model = CurveModel(curve, scene, s, points=points, segments=seg)
+        extra = [r.par.si(r.best.params) for r in raws.values()]
+        raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
+                           extra_starts=extra)
+    # profiles cost ~2/3 of a fit: compute them only where the reported estimates come from
+    fits = {s: summarize(r, profile=False) for s, r in raws.items()}
+    verdict = compare({s: f.bic for s, f in fits.items()}, {s: f.aic for s, f in fits.items()})
+    if profile:
+        wanted = [verdict["parameters_from"]] if verdict["selected"] is not None else list(fits)
+        fits.update({s: summarize(raws[s], profile=True) for s in wanted})
+    rep = fits[verdict["parameters_from"]]
+    options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
+               "fit_force_offset": fit_force_offset, "points": points, "profile": profile}
+    return FitResult(
+        method=method, slip=verdict, parameters=_reported(fits, verdict), fits=fits,
+        n_points=len(curve.x), n_excluded=len(curve.excluded), sigma=rep.sigma,
+        sigma_source="given" if sigma is not None else SIGMA_ESTIMATED,
+        warnings=tuple(_warnings(scene, fits, verdict, curve)),
+        n_evaluations=sum(f.n_evaluations for f in fits.values()),
+        n_histories=sum(f.n_histories for f in fits.values()), wall_time=time.perf_counter() - t0,
+        provenance=_provenance(curve, scene, seed, method, options), segments=seg.as_dict(),
+        excluded=tuple(curve.excluded), curve=curve, raw={s: f.raw for s, f in fits.items()})

@@ -1,0 +1,226 @@
+"""Least-squares fit of one slip condition with lmfit (``least_squares``, trust-region reflective).
+
+Fitted parameters (rows of :data:`adhfit.params.FITTED`): ``work_of_adhesion`` and ``mu_h``, plus the
+nuisance ``displacement_offset`` (on by default under displacement control) or ``pressure_offset``
+(off by default) and ``force_offset`` (off by default).
+
+* **Parametrisation**: the optimiser sees ln W_ad, ln μh, the offset over the data's control range
+  and the force offset over the largest force, so every internal parameter is O(1) and its
+  finite-difference step (relative 1e-6) is meaningful; results are reported in SI.
+* **Residual**: (F_measured - F_model) / s over every row (plus the pull-off position term of
+  :func:`residual_function`), with s = σ when σ is given (covariance
+  not rescaled) and s = the largest force otherwise; then lmfit scales the covariance by the
+  reduced χ² (``scale_covar=True``), i.e. σ is estimated from the residuals.
+* **Starts** (B4): the data-based start of :mod:`.starts`, then a few perturbed starts (W_ad × 1/2
+  and × 2, μh × 0.8 and × 1.25, the offset ± 5 % of the control range); every start is scored by one
+  evaluation and the best two distinct ones (plus any caller-given start) are minimised; the
+  lowest χ² wins.  Outside the model's domain the residual is a large constant, which the
+  trust-region method backs away from.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import lmfit
+import numpy as np
+
+from ..params import FITTED
+from .model import OFFSET_NAME, CurveModel, ModelDomainError
+from .starts import Start, data_start, noise_estimate
+
+__all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise"]
+
+#: relative finite-difference step of the Jacobian (the history's solver noise is ~1e-12)
+DIFF_STEP = 1e-6
+#: residual of a parameter set outside the model's domain, per row, in units of s
+PENALTY = 1e3
+
+
+@dataclass(frozen=True)
+class Parametrisation:
+    """Internal (optimiser) <-> SI parameters.
+
+    Attributes
+    ----------
+    x_scale : float
+        Range of the measured control values (m or Pa); the offset is fitted over it.
+    f_scale : float
+        Largest measured force, N; the force offset is fitted over it.
+    control : str
+    fit_x_offset, fit_force_offset : bool
+    """
+
+    x_scale: float
+    f_scale: float
+    control: str
+    fit_x_offset: bool
+    fit_force_offset: bool
+
+    @property
+    def names(self) -> list[str]:
+        """SI names of the fitted parameters, in order."""
+        out = ["work_of_adhesion", "mu_h"]
+        if self.fit_x_offset:
+            out.append(OFFSET_NAME[self.control])
+        if self.fit_force_offset:
+            out.append("force_offset")
+        return out
+
+    def params(self, start: Start) -> lmfit.Parameters:
+        """lmfit Parameters at ``start`` with the bounds of the parameter table (SI -> internal)."""
+        p = lmfit.Parameters()
+        for name in ("work_of_adhesion", "mu_h"):
+            row = FITTED[name]
+            lo = math.log(row.lower) if row.lower > 0 else -np.inf
+            hi = math.log(row.upper) if math.isfinite(row.upper) else np.inf
+            p.add(f"ln_{name}", value=math.log(start[name]), min=lo, max=hi)
+        if self.fit_x_offset:
+            row = FITTED[OFFSET_NAME[self.control]]
+            p.add("x_offset", value=start["x_offset"] / self.x_scale, min=row.lower / self.x_scale,
+                  max=row.upper / self.x_scale)
+        if self.fit_force_offset:
+            row = FITTED["force_offset"]
+            p.add("force_offset", value=start["force_offset"] / self.f_scale,
+                  min=row.lower / self.f_scale, max=row.upper / self.f_scale)
+        return p
+
+    def si(self, values: dict) -> dict:
+        """Internal values (a dict or lmfit Parameters) -> SI dict with all four model arguments."""
+        v = {k: float(getattr(values[k], "value", values[k])) for k in values}
+        return {"work_of_adhesion": math.exp(v["ln_work_of_adhesion"]), "mu_h": math.exp(v["ln_mu_h"]),
+                "x_offset": v.get("x_offset", 0.0) * self.x_scale,
+                "force_offset": v.get("force_offset", 0.0) * self.f_scale}
+
+    def jacobian_to_si(self, si: dict) -> np.ndarray:
+        """Diagonal d(SI)/d(internal) of the fitted parameters, in the order of :attr:`names`."""
+        d = [si["work_of_adhesion"], si["mu_h"]]
+        if self.fit_x_offset:
+            d.append(self.x_scale)
+        if self.fit_force_offset:
+            d.append(self.f_scale)
+        return np.array(d)
+
+
+def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float):
+    """The residual vector for lmfit (params -> array).
+
+    (F_measured - F_model)/scale at every row, then, when the data show the pull-off jump, one term
+    (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position against the model's turning
+    point, with σ_jump from the row spacing (:attr:`CurveModel.jump`) and σ the force noise (given,
+    or the robust estimate), so that the term has the weight of one observation.
+    """
+    force = model.force
+    jump = model.jump
+    n = force.size + (jump is not None)
+
+    def residual(params):
+        si = par.si(params.valuesdict())
+        w, mu, off = si["work_of_adhesion"], si["mu_h"], si["x_offset"]
+        try:
+            pred = model.predict(w, mu, off, si["force_offset"])
+            r = (force - pred) / scale
+            if jump is None:
+                return r
+            x_tp = model.turning_point(w, mu, off)[0]
+        except ModelDomainError:
+            return np.full(n, PENALTY)
+        return np.append(r, (jump[0] - x_tp) / jump[1] * sigma / scale)
+    return residual
+
+
+def minimise(residual, params: lmfit.Parameters, *, scale_covar: bool, max_nfev: int = 400,
+             tol: float = 1e-10):
+    """One lmfit ``least_squares`` run (TRF, 2-point Jacobian with step :data:`DIFF_STEP`).
+
+    ``tol`` is scipy's ftol = xtol = gtol: 1e-10 for optima; the profile's sub-fits need only the
+    χ² to ~1e-5 relative (a few hundredths of σ² on ~10² rows).
+    """
+    mini = lmfit.Minimizer(residual, params, scale_covar=scale_covar)
+    return mini.minimize(method="least_squares", max_nfev=max_nfev, diff_step=DIFF_STEP,
+                         x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
+
+
+@dataclass(frozen=True)
+class RawFit:
+    """What :func:`fit_slip` found: the best lmfit result, its model and parametrisation, the starts.
+
+    Attributes
+    ----------
+    slip : str
+    best : lmfit.minimizer.MinimizerResult
+    model : CurveModel
+    par : Parametrisation
+    scale : float
+        Residual scale s (σ when given, else the largest force), N.
+    sigma_given : bool
+    starts : list of dict
+        Each start (SI) with the χ² it reached.
+    """
+
+    slip: str
+    best: object
+    model: CurveModel
+    par: Parametrisation
+    scale: float
+    sigma_given: bool
+    starts: list
+
+
+def _perturbed(start: Start, par: Parametrisation) -> list[Start]:
+    out = [start]
+    for fw, fm in ((0.5, 1.0), (2.0, 1.0), (1.0, 0.8), (1.0, 1.25), (0.5, 0.8), (2.0, 1.25)):
+        out.append(Start(start, work_of_adhesion=start["work_of_adhesion"] * fw, mu_h=start["mu_h"] * fm))
+    if par.fit_x_offset:
+        for dx in (-0.05, 0.05):
+            out.append(Start(start, x_offset=start["x_offset"] + dx * par.x_scale))
+    return out
+
+
+def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
+             fit_force_offset: bool = False, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
+    """Fit W_ad, μh (and offsets) of one slip condition by least squares.
+
+    Parameters
+    ----------
+    model : CurveModel
+        The measured curve's model for this slip condition.
+    sigma : float, optional
+        Force noise σ (N); estimated from the residuals when not given.
+    fit_x_offset : bool, optional
+        Fit the control-variable offset; default: yes under displacement control, no under pressure
+        control.
+    fit_force_offset : bool
+        Fit a load-cell offset.
+    extra_starts : list of dict
+        More starts in SI (e.g. the other slip condition's optimum); always minimised.
+    n_runs : int
+        How many of the scored data-based starts are minimised.
+
+    Returns
+    -------
+    RawFit
+    """
+    control = model.control
+    fit_x_offset = (control == "displacement") if fit_x_offset is None else bool(fit_x_offset)
+    x_scale = float(np.ptp(model.x)) or 1.0
+    f_scale = float(np.max(np.abs(model.force))) or 1.0
+    par = Parametrisation(x_scale, f_scale, control, fit_x_offset, fit_force_offset)
+    scale = float(sigma) if sigma is not None else f_scale
+    sigma_est = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * f_scale)
+    residual = residual_function(model, par, scale, sigma_est)
+    base = data_start(model, fit_offset=fit_x_offset)
+    scored = []
+    for s in _perturbed(base, par):
+        r = residual(par.params(s))
+        scored.append((float(r @ r), s))
+    scored.sort(key=lambda t: t[0])
+    runs = [s for _, s in scored[:n_runs]] + [Start(base, **e) for e in extra_starts]
+    results, starts = [], []
+    for s in runs:
+        res = minimise(residual, par.params(s), scale_covar=sigma is None)
+        results.append(res)
+        starts.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr)})
+    best = min(results, key=lambda r: r.chisqr)
+    return RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
+                  sigma_given=sigma is not None, starts=starts)

@@ -1,0 +1,404 @@
+"""The model of a measured curve: the predicted force at every measured row (DESIGN.md B4).
+
+A measured curve is a history: loading (the control variable rises to its largest value, row
+``Curve.i_turn``), then unloading, possibly past pull-off.  The model follows the same history:
+
+* **loading rows** (``0 .. i_turn``): zero force before contact (δ < 0 under displacement control,
+  p < p_cr under pressure control), then the making-contact branch;
+* **attached unloading rows** (after ``i_turn``, before the measured detachment jump): contact pinning
+  then delamination, down to the turning point of the control variable (least δ or least p);
+  a row whose control value lies beyond the model's turning point is given the turning-point force
+  (a clamp that keeps the residual continuous in the parameters while the model and the data
+  disagree about where pull-off happens);
+* **detached rows** (from the measured jump on): the free membrane, zero force.
+
+Where the jump happened is itself a measurement of the model's turning point: it lies between the
+last attached row and the first detached row (:attr:`CurveModel.jump`).  The fit adds it as one
+more residual (see :mod:`.lsq`).  Without it the pull-off position would only enter through the
+clamp, and a model that detaches later than the data would cost nothing: under pressure control on a
+flat substrate, where delamination is unstable from its onset, W_ad would then be unidentifiable.
+
+The segments are found by **row order**, never by control value (rows just before and just after
+the jump may share a displacement): :func:`segment` finds the end of loading (``Curve.i_turn``) and the
+detachment jump (the largest rise of the force toward zero after the most negative force, kept
+only when it is large against the noise and the force after it is near zero).
+
+For each parameter set one history is computed with :func:`adhfit.simulate` (``points`` rows), ending
+the loading at the data's largest control value, and the force is interpolated along its monotone
+pieces: making contact in the control variable x (δ/b or p), pinning and delamination in
+u = sqrt(x - x_tp).  The force has an infinite slope dF/dx at the turning point x_tp but is smooth in
+u (x - x_tp is quadratic in the branch's locator there), and the pinning/delamination kink at the
+onset is a node of both pieces, so the piecewise-cubic (PCHIP) interpolants are accurate to ~1e-4 of
+the largest force with 150 rows and move smoothly with the parameters: no row-picking step.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+from ..errors import AdhfitError, InputError
+from ..simulation import simulate
+
+__all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
+           "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS"]
+
+#: dimensionless control variable of each control mode (DESIGN.md A1)
+CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
+#: name of the control-variable offset (a row of adhfit.params.FITTED) per control mode
+OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offset"}
+#: rows per computed history: interpolation error ~1e-4 of the largest force (module docstring)
+DEFAULT_POINTS = 150
+#: extra rows tried when a history fails (the engine's continuation can stall at one row count and
+#: succeed at a neighbouring one; the interpolants differ by ~1e-4 of the force, far below the noise)
+RETRY_POINTS = (0, 7, 19)
+#: a jump must exceed this fraction of the most negative force ...
+JUMP_FRACTION = 0.3
+#: ... and this many robust standard deviations of the row-to-row force changes
+JUMP_NOISE = 6.0
+
+
+class ModelDomainError(AdhfitError, ValueError):
+    """The parameters leave the model's domain (the history cannot be computed)."""
+
+    def __init__(self, message: str, params: dict) -> None:
+        self.params = dict(params)
+        super().__init__(f"{message} (at {', '.join(f'{k}={v:.6g}' for k, v in self.params.items())})")
+
+
+# ----------------------------------------------------------------------------------------------
+# segmentation of the measured rows
+
+
+@dataclass(frozen=True)
+class Segments:
+    """Row-order segments of a measured curve.
+
+    Attributes
+    ----------
+    n : int
+        Number of rows.
+    i_turn : int
+        Last loading row (largest control value, first occurrence).
+    i_jump : int or None
+        First row after the detachment jump (model force zero from here on); ``None`` when the data
+        end before pull-off.
+    jump : float
+        Size of the detected jump, N (0 when none).
+    """
+
+    n: int
+    i_turn: int
+    i_jump: int | None
+    jump: float = 0.0
+
+    def _mask(self, lo: int, hi: int) -> np.ndarray:
+        m = np.zeros(self.n, bool)
+        m[lo:hi] = True
+        return m
+
+    @property
+    def loading(self) -> np.ndarray:
+        """Boolean mask of the loading rows (the turning row included)."""
+        return self._mask(0, self.i_turn + 1)
+
+    @property
+    def attached(self) -> np.ndarray:
+        """Boolean mask of the unloading rows before the detachment jump."""
+        return self._mask(self.i_turn + 1, self.n if self.i_jump is None else self.i_jump)
+
+    @property
+    def detached(self) -> np.ndarray:
+        """Boolean mask of the rows after the jump (free membrane)."""
+        return self._mask(self.n if self.i_jump is None else self.i_jump, self.n)
+
+    def as_dict(self) -> dict:
+        return {"i_turn": self.i_turn, "i_jump": self.i_jump, "jump": self.jump,
+                "n_loading": int(self.loading.sum()), "n_attached": int(self.attached.sum()),
+                "n_detached": int(self.detached.sum())}
+
+
+def detect_jump(force: np.ndarray, i_turn: int) -> tuple[int | None, float]:
+    """First row after the detachment jump, and the jump's size (N).
+
+    The jump is the largest rise of the force between consecutive rows after the most negative force
+    of the unloading rows.  It is accepted only if it exceeds ``JUMP_FRACTION`` of that force and
+    ``JUMP_NOISE`` robust standard deviations (median absolute deviation) of the row-to-row changes,
+    and if the force after it is closer to zero than to the force before it.
+
+    Returns
+    -------
+    (i_jump, size) : (int or None, float)
+        ``(None, 0.0)`` when the data end before pull-off.
+    """
+    f = np.asarray(force, float)
+    i_min = i_turn + int(np.argmin(f[i_turn:]))
+    if f[i_min] >= 0.0 or i_min >= f.size - 1:
+        return None, 0.0
+    steps = np.diff(f[i_min:])
+    k = int(np.argmax(steps))
+    size = float(steps[k])
+    all_steps = np.diff(f[i_turn:])
+    noise = 1.4826 * float(np.median(np.abs(all_steps - np.median(all_steps))))
+    before, after = f[i_min + k], float(np.median(f[i_min + k + 1:]))
+    if size > JUMP_FRACTION * abs(f[i_min]) and size > JUMP_NOISE * noise \
+            and abs(after) < 0.5 * abs(before):
+        return i_min + k + 1, size
+    return None, 0.0
+
+
+def segment(curve) -> Segments:
+    """Segment a :class:`~adhfit.data.Curve` by row order (loading, attached, detached)."""
+    i_jump, size = detect_jump(curve.force, curve.i_turn)
+    return Segments(n=len(curve.x), i_turn=int(curve.i_turn), i_jump=i_jump, jump=size)
+
+
+# ----------------------------------------------------------------------------------------------
+# interpolants of one computed history
+
+
+@dataclass(frozen=True)
+class Pieces:
+    """Interpolants of one dimensionless history (x = δ/b or p; f = F/(2 μh b)).
+
+    Attributes
+    ----------
+    x_contact, x_max : float
+        Control value where contact starts (0 or p_cr) and where loading ends.
+    x_tp, f_tp : float
+        The turning point (least x on the way out) and its force.
+    x_onset : float
+        Control value at the onset of delamination.
+    loading : PchipInterpolator
+        f(x) on making contact, x in [x_contact, x_max].
+    retraction : list of (u_lo, u_hi, PchipInterpolator)
+        f(u), u = sqrt(x - x_tp), one piece per stage (pinning, delamination).
+    frame : pandas.DataFrame
+        The history itself (for plots and reports).
+    """
+
+    x_contact: float
+    x_max: float
+    x_tp: float
+    f_tp: float
+    x_onset: float
+    loading: PchipInterpolator
+    retraction: list
+    frame: object
+
+    def f_loading(self, x: np.ndarray) -> np.ndarray:
+        """Force on loading: zero before contact, making contact after."""
+        xc = np.clip(x, self.x_contact, self.x_max)
+        return np.where(x <= self.x_contact, 0.0, self.loading(xc))
+
+    def f_unloading(self, x: np.ndarray) -> np.ndarray:
+        """Force on the way out while attached; clamped to the turning point beyond it."""
+        u = np.sqrt(np.clip(x - self.x_tp, 0.0, None))
+        out = np.full(u.shape, self.f_tp)
+        for lo, hi, interp in self.retraction:
+            m = (u >= lo) & (u <= hi)
+            out[m] = interp(u[m])
+        top = self.retraction[-1][1] if self.retraction else 0.0
+        if self.retraction:
+            out[u > top] = self.retraction[-1][2](top)
+        return out
+
+
+def _piece(x: np.ndarray, f: np.ndarray, x_tp: float):
+    """(u_lo, u_hi, interpolant) of f against u = sqrt(x - x_tp) over rows in history order."""
+    u = np.sqrt(np.clip(x - x_tp, 0.0, None))[::-1]
+    f = f[::-1]
+    keep = np.concatenate([[True], np.diff(u) > 0])
+    u, f = u[keep], f[keep]
+    if u.size < 2:
+        return None
+    return float(u[0]), float(u[-1]), PchipInterpolator(u, f, extrapolate=True)
+
+
+def pieces_from_frame(frame, control: str) -> Pieces:
+    """Build the interpolants of one history frame (:func:`adhfit.simulate` output)."""
+    key = CONTROL_KEY[control]
+    stage = frame["stage"].to_numpy()
+    stable = frame["stable"].to_numpy(bool)
+    x, f = frame[key].to_numpy(float), frame["f"].to_numpy(float)
+    mc = np.flatnonzero(stage == "making_contact")
+    xl, fl = x[mc], f[mc]
+    keep = np.concatenate([[True], np.diff(xl) > 0])
+    loading = PchipInterpolator(xl[keep], fl[keep], extrapolate=True)
+    j_tp = int(np.flatnonzero(stable)[-1])
+    x_tp, f_tp = float(x[j_tp]), float(f[j_tp])
+    pin = np.flatnonzero((stage == "pinning") & stable)
+    dl = np.flatnonzero((stage == "delamination") & stable)
+    parts = []
+    pin_rows = np.concatenate([[mc[-1]], pin])  # retraction starts at the end of loading
+    parts.append(_piece(x[pin_rows], f[pin_rows], x_tp))
+    onset = pin[-1] if pin.size else mc[-1]
+    if dl.size:
+        rows = np.concatenate([[onset], dl])
+        parts.append(_piece(x[rows], f[rows], x_tp))
+    parts = sorted((p for p in parts if p is not None), key=lambda p: p[0])
+    return Pieces(x_contact=float(xl[0]), x_max=float(xl[-1]), x_tp=x_tp, f_tp=f_tp,
+                  x_onset=float(x[onset]), loading=loading, retraction=parts, frame=frame)
+
+
+# ----------------------------------------------------------------------------------------------
+# the model
+
+
+class CurveModel:
+    """Predicted force (N) at every row of a measured curve, for one slip condition.
+
+    Parameters
+    ----------
+    curve : adhfit.data.Curve
+        The measured curve (SI).
+    scene : adhfit.scene.Scene
+        Geometry and the fixed pressure or gap; its μh, W_ad and loading end are ignored.
+    slip : {"no-slip", "frictionless"}
+    points : int
+        Rows per computed history.
+    segments : Segments, optional
+        Row-order segments; found with :func:`segment` when not given.
+
+    Notes
+    -----
+    The model counts its histories (:attr:`n_histories`) and predictions (:attr:`n_evaluations`); it
+    keeps the last few histories, so a repeated parameter set costs nothing.  It is not thread-safe.
+    """
+
+    def __init__(self, curve, scene, slip: str, *, points: int = DEFAULT_POINTS,
+                 segments: Segments | None = None) -> None:
+        if slip not in ("no-slip", "frictionless"):
+            raise InputError("slip", slip, "one of 'no-slip', 'frictionless'")
+        if curve.control != scene.control:
+            raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
+        self.curve, self.scene, self.slip, self.points = curve, scene, slip, int(points)
+        self.control = scene.control
+        self.segments = segments if segments is not None else segment(curve)
+        self.x = np.asarray(curve.x, float)
+        self.force = np.asarray(curve.force, float)
+        self.x_max = float(self.x[self.segments.i_turn])
+        self._loading = self.segments.loading
+        self._attached = self.segments.attached
+        self._cache: dict = {}
+        self.n_histories = 0
+        self.n_evaluations = 0
+
+    def groups(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> dict:
+        """Keyword arguments of :func:`adhfit.simulate` for these parameters (loading end from data)."""
+        try:
+            kw = self.scene.to_dimensionless(mu_h=float(mu_h), work_of_adhesion=float(work_of_adhesion),
+                                             slip=self.slip)
+        except InputError as err:
+            raise ModelDomainError(str(err), self._named(work_of_adhesion, mu_h, x_offset)) from None
+        for end in ("a_max", "delta_max", "p_max"):
+            kw.pop(end, None)
+        scales = self.scene.scales(float(mu_h))
+        if self.control == "displacement":
+            kw["delta_max"] = scales.to_delta(self.x_max + x_offset)
+        else:
+            kw["p_max"] = scales.to_p(self.x_max + x_offset)
+        return kw
+
+    def _named(self, w, mu, off) -> dict:
+        return {"work_of_adhesion": float(w), "mu_h": float(mu), OFFSET_NAME[self.control]: float(off)}
+
+    def pieces(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> Pieces:
+        """The interpolants of the history for these parameters (cached)."""
+        key = (float(work_of_adhesion), float(mu_h), float(x_offset))
+        if key in self._cache:
+            return self._cache[key]
+        kw = self.groups(*key)
+        pcs = None
+        for extra in RETRY_POINTS:
+            try:
+                self.n_histories += 1
+                pcs = pieces_from_frame(simulate(**kw, points=self.points + extra).frame, self.control)
+                break
+            except (AdhfitError, ValueError, IndexError) as err:
+                failure = err
+        if pcs is None:
+            raise ModelDomainError(f"no history: {failure}", self._named(*key)) from None
+        if len(self._cache) >= 8:
+            self._cache.pop(next(iter(self._cache)))
+        self._cache[key] = pcs
+        return pcs
+
+    def dimensionless_x(self, mu_h: float, x_offset: float) -> np.ndarray:
+        """The measured control values as δ/b or p (with the offset)."""
+        scales = self.scene.scales(float(mu_h))
+        shifted = self.x + x_offset
+        return scales.to_delta(shifted) if self.control == "displacement" else scales.to_p(shifted)
+
+    def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
+                force_offset: float = 0.0) -> np.ndarray:
+        """Predicted force at every measured row, N (compressive positive).
+
+        Parameters
+        ----------
+        work_of_adhesion : float
+            W_ad, J/m^2.
+        mu_h : float
+            μh, N/m.
+        x_offset : float
+            Added to the measured control values: displacement offset (m) or pressure offset (Pa).
+        force_offset : float
+            Added to the predicted force (load-cell zero), N.
+
+        Raises
+        ------
+        ModelDomainError
+            The parameters leave the model's domain.
+        """
+        self.n_evaluations += 1
+        pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
+        xd = self.dimensionless_x(mu_h, x_offset)
+        f = np.zeros(xd.shape)
+        f[self._loading] = pcs.f_loading(xd[self._loading])
+        f[self._attached] = pcs.f_unloading(xd[self._attached])
+        return self.scene.scales(float(mu_h)).from_f(f) + force_offset
+
+    @property
+    def jump(self) -> tuple[float, float] | None:
+        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units.
+
+        The jump happened between the last attached row and the first detached row: x_jump is their
+        midpoint and σ_jump = |spacing|/sqrt(12), the standard deviation of a position known only to
+        lie in that interval.  ``None`` when the data end before pull-off.
+        """
+        j = self.segments.i_jump
+        if j is None:
+            return None
+        x_a, x_d = self.x[j - 1], self.x[j]
+        return float(0.5 * (x_a + x_d)), max(abs(float(x_a - x_d)), 1e-12 * self.x_max) / math.sqrt(12.0)
+
+    def turning_point(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> tuple[float, float]:
+        """The model's turning point (pull-off) in measured units: (control value, force in N)."""
+        pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
+        sc = self.scene.scales(float(mu_h))
+        x = sc.from_delta(pcs.x_tp) if self.control == "displacement" else sc.from_p(pcs.x_tp)
+        return float(x) - x_offset, float(sc.from_f(pcs.f_tp))
+
+    def near_turning_point(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
+                           fraction: float = 0.1) -> bool:
+        """True when the optimum sits on the kink: an attached row lies beyond the model's turning point
+        (clamped) or closer to it than ``fraction`` of the local row spacing.  The force's slope is
+        infinite there, so the Jacobian (and the covariance) is fragile (DESIGN.md B4)."""
+        pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
+        xd = self.dimensionless_x(mu_h, x_offset)[self._attached]
+        if xd.size < 2:
+            return False
+        k = int(np.argmin(xd))
+        spacing = float(np.median(np.abs(np.diff(xd))))
+        return bool(xd[k] - pcs.x_tp < fraction * spacing)
+
+
+def finite_or_none(x) -> float | None:
+    """A float, or None when not finite (JSON has no NaN)."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None

@@ -1,0 +1,259 @@
+"""Fit results: frozen, complete, the same fields whatever the method (STYLE habit 5).
+
+A :class:`FitResult` never re-runs a fit: it holds the estimates, both slip conditions' fits with their
+predictions and model curves, the slip verdict, warnings and provenance; the optimiser's own objects
+are kept in ``raw``.  :meth:`FitResult.as_dict` gives the report.json content (DESIGN.md A5) with
+``None`` wherever a number is not finite.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..params import FITTED
+
+__all__ = ["Estimate", "SlipFit", "FitResult", "clean"]
+
+
+def clean(x: Any) -> Any:
+    """JSON-safe copy: numpy scalars and arrays to Python, non-finite floats to ``None``."""
+    if isinstance(x, Mapping):
+        return {str(k): clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [clean(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return [clean(v) for v in x.tolist()]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(float(x)) else None
+    return x
+
+
+def _readonly(a) -> np.ndarray:
+    arr = np.array(a, dtype=float, copy=True)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One fitted parameter in SI.
+
+    Attributes
+    ----------
+    name : str
+        Row of :data:`adhfit.params.FITTED`.
+    value : float
+    stderr : float or None
+        Standard error from the covariance (delta method from the internal parametrisation).
+    ci95 : (float, float) or None
+        95 % interval.
+    ci_method : {"profile", "covariance", "covariance (two slips)", None}
+        Where ``ci95`` comes from.
+    ci95_covariance : (float, float) or None
+        The covariance interval, kept for comparison with the profile.
+    """
+
+    name: str
+    value: float
+    stderr: float | None = None
+    ci95: tuple[float, float] | None = None
+    ci_method: str | None = None
+    ci95_covariance: tuple[float, float] | None = None
+
+    @property
+    def unit(self) -> str:
+        return FITTED[self.name].unit
+
+    @property
+    def symbol(self) -> str:
+        return FITTED[self.name].symbol
+
+    def as_dict(self) -> dict:
+        return clean({"value": self.value, "stderr": self.stderr, "ci95": self.ci95, "unit": self.unit,
+                      "ci_method": self.ci_method, "ci95_covariance": self.ci95_covariance})
+
+
+@dataclass(frozen=True)
+class SlipFit:
+    """The fit of one slip condition.
+
+    Attributes
+    ----------
+    slip : str
+    parameters : mapping name -> Estimate
+        ``work_of_adhesion``, ``mu_h`` and the fitted offsets.
+    chisqr : float
+        Sum of squared residuals in units of the residual scale (σ when given).
+    redchi, aic, bic : float
+        Reduced χ²; AIC and BIC as defined in :mod:`.selection`.
+    ndata, nvarys : int
+        Residuals (rows, plus one for the pull-off position) and fitted parameters.
+    sigma : float
+        Force noise σ, N: given, or estimated as sqrt(redchi) x the residual scale.
+    correlation : float or None
+        Correlation of W_ad and μh (of their logarithms, which is the same to first order).
+    predicted : ndarray
+        Model force at every row, N.
+    model_curve : mapping
+        Dense model curve in measured units for plots (``x_loading, force_loading, x_unloading,
+        force_unloading, x_onset, x_turning_point, force_turning_point``).
+    warnings : tuple of str
+    starts : tuple of dict
+        Every start (SI) and the χ² it reached.
+    profile : mapping
+        Per parameter: sub-fits spent and whether each limit converged.
+    n_evaluations, n_histories : int
+        Model predictions and computed histories spent on this slip condition.
+    success : bool
+    message : str
+    raw : object
+        The optimiser's result (lmfit ``MinimizerResult``); not compared, not serialised.
+    """
+
+    slip: str
+    parameters: Mapping[str, Estimate]
+    chisqr: float
+    redchi: float
+    aic: float
+    bic: float
+    ndata: int
+    nvarys: int
+    sigma: float
+    correlation: float | None
+    predicted: np.ndarray
+    model_curve: Mapping[str, Any]
+    warnings: tuple[str, ...] = ()
+    starts: tuple = ()
+    profile: Mapping[str, Any] = field(default_factory=dict)
+    n_evaluations: int = 0
+    n_histories: int = 0
+    success: bool = True
+    message: str = ""
+    raw: Any = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "predicted", _readonly(self.predicted))
+        object.__setattr__(self, "parameters", MappingProxyType(dict(self.parameters)))
+        object.__setattr__(self, "model_curve", MappingProxyType(dict(self.model_curve)))
+
+    def as_dict(self) -> dict:
+        return clean({"parameters": {k: e.as_dict() for k, e in self.parameters.items()},
+                      "chisqr": self.chisqr, "redchi": self.redchi, "aic": self.aic, "bic": self.bic,
+                      "ndata": self.ndata, "nvarys": self.nvarys, "sigma": self.sigma,
+                      "correlation_work_of_adhesion_mu_h": self.correlation, "success": self.success,
+                      "message": self.message, "warnings": list(self.warnings), "starts": list(self.starts),
+                      "profile": dict(self.profile), "model_evaluations": self.n_evaluations,
+                      "histories": self.n_histories})
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """The result of ``adhfit fit`` (DESIGN.md A5), whatever the method.
+
+    Attributes
+    ----------
+    method : str
+        ``"lsq"`` (or ``"mcmc"``).
+    slip : mapping
+        ``selected`` (None when undecided), ``verdict``, ``delta_aic``, ``delta_bic`` and the
+        evidence scale used (:mod:`.selection`).
+    parameters : mapping name -> Estimate
+        The reported estimates: of the selected slip condition; when undecided, of the one with the
+        lower BIC, with 95 % intervals widened to cover both conditions' intervals.
+    fits : mapping slip -> SlipFit
+    n_points, n_excluded : int
+        Rows used, and lines left out of the file (blank or comment lines, listed in ``excluded``).
+    sigma : float
+        Force noise σ of the reported fit, N.
+    sigma_source : str
+        ``"given"`` or ``"estimated from the residuals (covariance scaled by the reduced chi-square)"``.
+    warnings : tuple of str
+        What to distrust, in plain words.
+    n_evaluations, n_histories : int
+        Model predictions and computed histories, all slip conditions together.
+    wall_time : float
+        Seconds.
+    provenance : mapping
+        adhfit version, input file and sha256, scene, seed, method, options.
+    segments : mapping
+        Row-order segmentation of the data (end of loading, detachment jump).
+    curve : object
+        The measured curve (``adhfit.data.Curve``), for plots.
+    raw : mapping
+        The optimiser's results per slip condition; not compared, not serialised.
+    """
+
+    method: str
+    slip: Mapping[str, Any]
+    parameters: Mapping[str, Estimate]
+    fits: Mapping[str, SlipFit]
+    n_points: int
+    n_excluded: int
+    sigma: float
+    sigma_source: str
+    warnings: tuple[str, ...]
+    n_evaluations: int
+    n_histories: int
+    wall_time: float
+    provenance: Mapping[str, Any]
+    segments: Mapping[str, Any]
+    excluded: tuple = ()
+    curve: Any = field(default=None, compare=False, repr=False)
+    raw: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        for key in ("slip", "parameters", "fits", "provenance", "segments", "raw"):
+            object.__setattr__(self, key, MappingProxyType(dict(getattr(self, key))))
+
+    @property
+    def reported_slip(self) -> str:
+        """The slip condition whose fit gives :attr:`parameters`."""
+        return self.slip.get("parameters_from") or self.slip.get("selected") or next(iter(self.fits))
+
+    @property
+    def correlation(self) -> float | None:
+        """Correlation of W_ad and μh in the reported fit."""
+        return self.fits[self.reported_slip].correlation
+
+    @property
+    def offsets(self) -> dict:
+        """The fitted nuisance parameters of the reported fit (SI)."""
+        return {k: e for k, e in self.parameters.items() if k not in ("work_of_adhesion", "mu_h")}
+
+    def as_dict(self) -> dict:
+        """The report.json content: the A5 keys and more, no NaN (``None`` instead)."""
+        return clean({
+            "method": self.method, "slip": dict(self.slip),
+            "parameters": {k: e.as_dict() for k, e in self.parameters.items()
+                           if k in ("work_of_adhesion", "mu_h")},
+            "offsets": {k: e.as_dict() for k, e in self.offsets.items()},
+            "fits": {k: f.as_dict() for k, f in self.fits.items()},
+            "correlation_work_of_adhesion_mu_h": self.correlation,
+            "n_points": self.n_points, "n_excluded": self.n_excluded, "excluded": list(self.excluded),
+            "sigma": self.sigma, "sigma_source": self.sigma_source, "segments": dict(self.segments),
+            "warnings": list(self.warnings), "model_evaluations": self.n_evaluations,
+            "histories": self.n_histories, "wall_time_s": self.wall_time,
+            "provenance": dict(self.provenance)})
+
+    def plot(self, ax=None, **kwargs):
+        """Data, both fitted curves and residuals (see :func:`adhfit.report.fit_plot.plot_fit`).
+
+        Returns the main axes.  Draws from stored predictions: never re-runs a fit.
+        """
+        from ..report.fit_plot import plot_fit  # noqa: PLC0415 - matplotlib lives in adhfit.report
+        return plot_fit(self, ax=ax, **kwargs)
+
+    def _repr_html_(self) -> str:  # notebooks
+        rows = "".join(f"<tr><td>{e.symbol}</td><td>{e.value:.5g}</td><td>{e.stderr or float('nan'):.2g}"
+                       f"</td><td>{e.ci95}</td><td>{e.unit}</td></tr>" for e in self.parameters.values())
+        return (f"<b>adhfit fit</b> ({self.method}); slip: {self.slip.get('verdict')}<table>"
+                f"<tr><th></th><th>value</th><th>stderr</th><th>95 %</th><th>unit</th></tr>{rows}</table>"
+                + "".join(f"<p>⚠ {w}</p>" for w in self.warnings))
