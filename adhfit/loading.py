@@ -87,14 +87,16 @@ def _loading_end(v, c, pc):
                              f"at which contact starts for d = {v['d']:g}")
 
         def resid(a):
-            return evaluate(mc, None, kappa, a, ctx)["d"] - target
+            e = evaluate(mc, None, kappa, a, ctx)
+            return np.where(e["ok"], e["d"] - target, np.nan)
     else:
         kappa, name = v["p"], "delta_max"
         d0 = float(apex_deflection(kappa))
         target = d0 - v["delta_max"]
 
         def resid(a):
-            return evaluate(mc, None, kappa, a, ctx)["d"] - target
+            e = evaluate(mc, None, kappa, a, ctx)
+            return np.where(e["ok"], e["d"] - target, np.nan)
     r_cap = float(np.real(resid(np.array([cap]))[0]))
     if not np.isfinite(r_cap) or r_cap > 0:
         reach = d0 - (r_cap + target) if not pc else None
@@ -102,7 +104,10 @@ def _loading_end(v, c, pc):
                  if (not pc and np.isfinite(r_cap)) else
                  f"reachable with a contact radius below {cap:g}")
         raise InputError(name, v[name], valid)
-    a = newton(resid, np.array([0.5 * cap]), np.array([1e-9 * cap]), np.array([cap]),
+    lo = 1e-9 * cap
+    if kappa > 1.0:  # Case I needs sin(theta) at the clamp <= 1: kappa (1 - a^2) - c a^2 <= 1
+        lo = max(lo, math.sqrt((kappa - 1.0) / (kappa + c)) * (1 + 1e-9))
+    a = newton(resid, np.array([0.5 * (lo + cap)]), np.array([lo]), np.array([cap]),
                what=f"contact radius for {name}", inputs={name: v[name]})
     return float(a[0])
 
@@ -129,7 +134,10 @@ def _mc_pressure(a, v, c):
     mc = BRANCHES[("making_contact", "no-slip")]
     ctx = Context(c, v["w"])
     try:
-        return newton(lambda k: evaluate(mc, None, k, a, ctx)["d"] - d_fix, 0.5 * (lo + hi), lo, hi,
+        def gap(k):
+            e = evaluate(mc, None, k, a, ctx)
+            return np.where(e["ok"], e["d"] - d_fix, np.nan)
+        return newton(gap, 0.5 * (lo + hi), lo, hi,
                       what="making contact: pressure from the fixed gap", inputs={"d": d_fix})
     except ConvergenceError as err:
         raise InputError("a_max", v["a_max"], "reachable under pressure control at this gap",
@@ -190,6 +198,16 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
     return (None if branch.target is None else xs), ks
 
 
+def _detachment_end(ctx, kappa):
+    """Where the history stops on the way to a -> 0: A_END a_max, or lower for very weak adhesion.
+
+    Near detachment f ~ pi[(kappa + c) a^2 - a tan(alpha)], whose minimum (the pull-off) sits at
+    a ~ tan(alpha) / (2 (kappa + c)) with tan(alpha) ~ sqrt(2 w): the end must lie well below it.
+    """
+    pull_off = np.sqrt(2.0 * ctx.w) / (2.0 * (abs(kappa) + ctx.c + 1.0))
+    return min(A_END * ctx.a_m, 0.1 * pull_off)
+
+
 def _delamination_start(slip, on_x, onset):
     """The unknown of the delamination branch at the onset (no slip: the same t as the pinned state)."""
     return float(on_x[0]) if slip == "no-slip" else None
@@ -228,7 +246,7 @@ def _pinning_path(slip, ctx, kappa_m, d_fix):
     return _follow(pin, 0.0, np.array([end]), x0, kappa_m, ctx, d_fix, log=False)[1]
 
 
-def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
+def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000, allow_end=False):
     """Follow a branch from locator l0 (solved: x0, k0) through ``targets`` (continuation).
 
     ``d_fix`` None means displacement control (kappa fixed at k0); else kappa is solved from the gap.
@@ -236,6 +254,10 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
     Steps are taken in the locator (``log=False``) or in its logarithm (``log=True``, for the contact
     radius on the way to detachment) and land exactly on every target; each state starts from a linear
     extrapolation of the last two; a failed or out-of-domain step is halved.
+
+    ``allow_end``: where the branch itself ends before the last target (no-slip delamination can,
+    see :func:`history`), return the path up to its end (located to ~1e-10 of the span) instead of
+    raising; the targets not reached are then missing from ``at_targets``.
 
     Returns
     -------
@@ -278,6 +300,8 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
         if not good:
             h *= 0.5
             if h < 1e-10 * span:
+                if allow_end and len(ss) > 1:
+                    break
                 raise ConvergenceError(f"{branch.stage} ({branch.slip}): continuation "
                                        f"stalled (the state leaves the model's domain)",
                                        {"locator": float(back(ss[-1])), "kappa": ks[-1], "d": d_fix,
@@ -291,6 +315,8 @@ def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000):
             i += 1
         h = min(1.6 * h, span / 8.0)
     path = (back(np.array(ss)), np.array(xs), np.array(ks))
+    if not out:
+        return (np.array([]), np.array([]), np.array([])), path
     return tuple(np.array(v) for v in zip(*out)), path
 
 
@@ -408,7 +434,8 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     # 3. pinning, locator in (0, end]: G (no slip, ~alpha^2 near 0) or alpha (frictionless)
     pin = BRANCHES[("pinning", slip)]
     end = _pin_end(slip, ctx)
-    u = _cluster(n_pin)[1:]
+    # dense toward the onset only: the start of pinning is the end of loading, and G ~ alpha^2 there
+    u = np.sin(0.5 * np.pi * np.arange(1, n_pin) / (n_pin - 1))
     lp = end * (u * u if slip == "no-slip" else u)
     k_guess = np.interp(lp, path[0], path[2])  # predictors from the continuation path
     x_guess = np.interp(lp, path[0], path[1])
@@ -417,20 +444,28 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
     check_ok(s_pin, "pinning", info)
 
-    # 4. delamination, a from a_on down to A_END a_m (denser toward detachment)
+    # 4. delamination, a from a_on toward detachment (denser toward its end). No slip: the branch can
+    # end at a finite radius, where the stretch-mismatch part of G, (t - 1)^2 / 2, alone reaches w
+    # (alpha -> 0); no state with G = w exists beyond it and detachment from there is dynamic.
     dl = BRANCHES[("delamination", slip)]
-    a_end = A_END * ctx.a_m
-    u = _cluster(n_del)[1:]
-    a_dl = a_end + (a_on - a_end) * (1.0 - u) ** 1.5
-    x_guess, k_guess = None, np.full(a_dl.shape, k_on)
+    a_end = _detachment_end(ctx, k_on)
+    x_guess, k_guess, dpath, branch_end = None, None, None, None
     if pc or dl.target is not None:  # explicit in displacement control when frictionless
         x_start = None if dl.target is None else _delamination_start(slip, on_x, onset)
-        dpath = _follow(dl, a_on, np.array([a_end]), x_start, k_on, ctx, d_fix if pc else None,
-                        log=True)[1]
+        reached, dpath = _follow(dl, a_on, np.array([a_end]), x_start, k_on, ctx,
+                                 d_fix if pc else None, log=True, allow_end=slip == "no-slip")
+        if reached[0].size == 0:
+            branch_end = float(dpath[0][-1])
+            a_end = branch_end
+    u = _cluster(n_del)[1:]
+    a_dl = a_end + (a_on - a_end) * (1.0 - u) ** 1.5
+    k_guess = np.full(a_dl.shape, k_on)
+    if dpath is not None:
         order = np.argsort(dpath[0])
         k_guess = np.interp(a_dl, dpath[0][order], dpath[2][order])
         if dl.target is not None:
             x_guess = np.interp(a_dl, dpath[0][order], dpath[1][order])
+            x_guess[-1] = dpath[1][-1] if branch_end is not None else x_guess[-1]
     x_dl, k_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
                              start=(a_on, None if dl.target is None else
                                     _delamination_start(slip, on_x, onset), k_on))
@@ -441,6 +476,8 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     extra = _extrema(stages, ctx, pc, kappa_dc, d_fix, onset)
     cols = _assemble(free, (a_mc, s_mc), (lp, s_pin), (a_dl, s_dl), extra, pc, d_fix)
     summary = _summary(cols, s_mc, onset, extra, pc, d_fix)
+    if branch_end is not None:
+        info["delamination_ends_at_a"] = branch_end  # quasi-static branch ends; dynamic detachment
     return History(cols, summary, info)
 
 

@@ -113,22 +113,12 @@ def test_no_slip_pinning_continuous_across_theta_a_half_pi():
 # ---------------------------------------------------------------------------------------------
 SMOOTH = [(c, s, kw) for c, kw in CASES[:4] for s in SLIPS] + [("pressure", "no-slip", PI2)]
 
-_BUG_1000 = ("BUG: adhfit.simulate('pressure', 'no-slip', d=0.0, w=0.2, rs=0.5, a_max=0.25, points=1000) "
-             "raises ConvergenceError 'pinning (no-slip): continuation stalled (the state leaves the "
-             "model's domain) ... locator=1.24e-08' (also points=1500; points=200..900 and 2000 work; "
-             "same failure with ADHFIT_BACKEND=numpy). The first pinning row's locator "
-             "G = w u^2 is ~1e-8 and the pressure-control continuation from locator 0 stalls on it.")
-
-
 def _smooth_params():
     out = []
     for c, s, kw in SMOOTH:
-        marks = ()
-        if (c, s, kw.get("d"), kw.get("rs")) == ("pressure", "no-slip", 0.0, 0.5):
-            marks = pytest.mark.xfail(strict=True, raises=adhfit.ConvergenceError, reason=_BUG_1000)
-        out.append(pytest.param(c, s, kw, 1000, marks=marks, id=f"{c}-{s}-{kw}"))
-    # the same smoothness check for the affected scene at a row count that runs
-    out.append(pytest.param("pressure", "no-slip", dict(d=0.0, rs=0.5), 900, id="pressure-no-slip-d0-900"))
+        out.append(pytest.param(c, s, kw, 1000, id=f"{c}-{s}-{kw}"))
+    # a row count whose first pinning locator once stalled the pressure-control continuation
+    out.append(pytest.param("pressure", "no-slip", dict(d=0.0, rs=0.5), 1500, id="pressure-no-slip-d0-1500"))
     return out
 
 
@@ -156,7 +146,6 @@ def test_rows_within_a_stage_are_a_smooth_curve(control, slip, kw, points):
             assert ratio < 0.1, (stage, col, ratio, int(np.argmax(np.abs(np.diff(d1)))))
 
 
-@pytest.mark.xfail(strict=True, raises=adhfit.ConvergenceError, reason=_BUG_1000)
 def test_pressure_no_slip_history_at_1000_points():
     r = adhfit.simulate("pressure", "no-slip", d=0.0, w=0.2, rs=0.5, a_max=0.25, points=1000)
     assert 1000 <= len(r.frame) <= 1005

@@ -290,13 +290,6 @@ def test_p_max_round_trips(d, rs, p_max, slip):
     assert mc.p.max() == pytest.approx(p_max, abs=1e-10)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "BUG: simulate('pressure', slip, d=0.2, w=0.2, rs=0.5, p_max=1.3) silently ends loading at "
-    "a_max = 0.2375 (= 0.5 * 0.95 rs, the start value of the Newton solve in loading._loading_end) "
-    "with p = 0.9386 instead of p = 1.3, which is reachable (state_at(..., a_max=a, a=a) with "
-    "a = 0.3253570267 gives p = 1.3 exactly, and simulate with that a_max succeeds). For p_max > 1 "
-    "the making-contact d(kappa, a) below the Case I domain comes back complex with a finite real part "
-    "instead of NaN, so the bracket check passes and the bracketed Newton stops at its start value."))
 def test_p_max_above_one_round_trips():
     r = adhfit.simulate("pressure", "no-slip", d=0.2, w=0.2, rs=0.5, p_max=1.3)
     mc = r.frame[r.frame.stage == "making_contact"]

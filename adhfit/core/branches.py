@@ -144,7 +144,9 @@ def _edge_cos(a, c, alpha):
 
 
 def _residual(branch, x, kappa, loc, ctx):
-    return evaluate(branch, x, kappa, loc, ctx)["J0"] - branch.target(loc, ctx)
+    e = evaluate(branch, x, kappa, loc, ctx)
+    # NaN outside the model, also under complex evaluation (where a sqrt of a negative stays finite)
+    return np.where(e["ok"], e["J0"] - branch.target(loc, ctx), np.nan)
 
 
 def solve_unknown(branch: Branch, kappa, loc, ctx: Context, x0=None, on_fail: str = "raise"):
@@ -206,7 +208,8 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
         if x is not None and np.all(np.isfinite(x)):
             memo["x"] = x
         xc = _propagate(branch, x, kr, kc, loc + 0j, ctx)
-        return evaluate(branch, xc, kc, loc, ctx)["d"] - d_fix
+        e = evaluate(branch, xc, kc, loc, ctx)
+        return np.where(e["ok"], e["d"] - d_fix, np.nan)
 
     k0 = np.broadcast_to(np.asarray(kappa0, float), loc.shape)
     kappa = newton(gap, k0, what=f"{branch.stage} ({branch.slip}): pressure from the fixed gap",

@@ -264,8 +264,10 @@ def _target(code, loc, c, a_m, L_m):
 @_jit
 def _residual(code, x, kappa, loc, c, w, a_m, L_m):
     """Material condition J0 - target (branches._residual); J1 is not needed."""
-    j0 = _state(code, x, kappa, loc, c, w, a_m, False)[5]
-    return j0 - _target(code, loc, c, a_m, L_m)
+    st = _state(code, x, kappa, loc, c, w, a_m, False)
+    if not st[6]:  # outside the model: NaN even under complex evaluation, where sqrt stays finite
+        return complex(math.nan, math.nan)
+    return st[5] - _target(code, loc, c, a_m, L_m)
 
 
 @_jit
@@ -328,6 +330,8 @@ def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
         done = exact or (inside and abs(xn - x) <= tol) or abs(hi - lo) <= tol
         x = xn
         if done:
+            if not finite:  # the bracket closed on a point outside the domain: no root
+                return math.nan, FAIL_INNER, rlo, rhi
             return x, OK, rlo, rhi
     return math.nan, FAIL_INNER, rlo, rhi
 
@@ -435,7 +439,8 @@ def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, xs, sta
                 continue
             kc, lc = complex(kappa[i], STEP), complex(loc[i], 0.0)
             xc = _propagate(code, xi[i], kappa[i], kc, lc, c, w, a_m, L_m) if implicit else 0j
-            g = _state(code, xc, kc, lc, c, w, a_m, True)[2] - d_fix
+            sg = _state(code, xc, kc, lc, c, w, a_m, True)
+            g = sg[2] - d_fix if sg[6] else complex(math.nan, math.nan)
             r, dr = g.real, g.imag / STEP
             good = math.isfinite(r) and math.isfinite(dr) and dr != 0
             if good:

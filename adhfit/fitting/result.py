@@ -90,14 +90,16 @@ class SlipFit:
     slip : str
     parameters : mapping name -> Estimate
         ``work_of_adhesion``, ``mu_h`` and the fitted offsets.
-    chisqr : float
-        Sum of squared residuals in units of the residual scale (σ when given).
-    redchi, aic, bic : float
-        Reduced χ²; AIC and BIC as defined in :mod:`.selection`.
+    chisqr, redchi : float
+        χ² and reduced χ² in units of σ²: the given σ, or, when σ is estimated, the robust
+        row-to-row noise of the data (second differences, :func:`.starts.noise_estimate`), so that
+        a reduced χ² near 1 means the model fits to the noise.
+    aic, bic : float
+        As defined in :mod:`.selection` (differences between slip conditions are what matter).
     ndata, nvarys : int
         Residuals (rows, plus one for the pull-off position) and fitted parameters.
     sigma : float
-        Force noise σ, N: given, or estimated as sqrt(redchi) x the residual scale.
+        Force noise σ, N: given, or estimated from the residuals, sqrt(RSS/(n - k)).
     correlation : float or None
         Correlation of W_ad and μh (of their logarithms, which is the same to first order).
     predicted : ndarray

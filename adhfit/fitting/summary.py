@@ -127,13 +127,16 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
         predicted = np.full(m.force.shape, np.nan)
     curve = _model_curve(raw)
     aic, bic = information_criteria(best.chisqr, best.ndata, best.nvarys, sigma_given=raw.sigma_given)
+    # χ² in units of σ²: the given σ, or the robust row-to-row noise (σ estimated)
+    unit = 1.0 if raw.sigma_given else (raw.scale / (noise_estimate(m.force) or raw.scale)) ** 2
+    chisqr = float(best.chisqr) * unit
     corr = None
     if best.covar is not None:
         c = best.covar
         corr = float(c[0, 1] / math.sqrt(c[0, 0] * c[1, 1])) if c[0, 0] > 0 and c[1, 1] > 0 else None
     prof_info = {k: {"subfits": lo.n_subfits + hi.n_subfits, "evaluations": lo.nfev + hi.nfev,
                      "converged": [lo.converged, hi.converged]} for k, (lo, hi) in profiles.items()}
-    return SlipFit(slip=raw.slip, parameters=est, chisqr=float(best.chisqr), redchi=float(best.redchi),
+    return SlipFit(slip=raw.slip, parameters=est, chisqr=chisqr, redchi=chisqr / max(best.nfree, 1),
                    aic=aic, bic=bic, ndata=int(best.ndata), nvarys=int(best.nvarys), sigma=float(sigma),
                    correlation=corr, predicted=predicted, model_curve=curve,
                    warnings=tuple(_warnings(raw, est, profiles, curve, sigma)), starts=tuple(raw.starts),

@@ -1,0 +1,111 @@
+"""``adhfit fit`` (DESIGN.md A5): the argument parser and the run function the CLI calls.
+
+Thin: parse, call :func:`adhfit.fitting.fit.fit_curve`, write ``report.json``, ``report.md`` and
+``fit.png`` into the output directory, print a short summary.  Invalid input raises
+:class:`~adhfit.errors.InputError` / :class:`~adhfit.errors.DataError`, which the CLI turns into one
+line on standard error and exit status 2.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import InputError
+from .fit import METHODS, SLIP_CHOICES
+from .model import DEFAULT_POINTS
+
+__all__ = ["add_fit_arguments", "run_fit"]
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--seed must be a non-negative integer; got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"--seed must be a non-negative integer; got {text!r}")
+    return value
+
+
+def _points(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--points must be an integer in [40, 5000]; got {text!r}") from None
+
+
+def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
+    """Add the ``fit`` sub-command to an argparse sub-parser collection; returns its parser."""
+    p = subparsers.add_parser(
+        "fit", help="fit W_ad, mu*h and the slip condition to a measured curve",
+        description="Fit the work of adhesion W_ad, the membrane stiffness mu*h and the interface slip "
+                    "condition to a measured force curve (DESIGN.md A5). Writes OUTDIR/report.json, "
+                    "report.md and fit.png.")
+    p.add_argument("data", type=Path, metavar="DATA.csv", help="measured curve (CSV, 'name [unit]' headers)")
+    p.add_argument("--scene", type=Path, required=True, metavar="SCENE.toml",
+                   help="scene file: geometry and the fixed pressure or gap")
+    p.add_argument("--method", choices=METHODS, default="lsq", help="lsq (least squares); mcmc: not yet")
+    p.add_argument("--slip", choices=SLIP_CHOICES, default=None,
+                   help="slip condition; default: the scene's (auto = fit both and compare)")
+    p.add_argument("--seed", type=_seed, default=None, help="random seed (recorded; lsq draws none)")
+    p.add_argument("-o", "--output", type=Path, default=None, metavar="OUTDIR",
+                   help="output directory (default: ./<DATA stem>_fit)")
+    p.add_argument("--sigma", default=None, metavar="FORCE",
+                   help="force noise, e.g. '0.01 mN' (default: estimated from the residuals)")
+    p.add_argument("--force-offset", action="store_true", help="also fit a load-cell offset")
+    p.add_argument("--no-offset", action="store_true",
+                   help="do not fit the displacement offset (displacement control)")
+    p.add_argument("--pressure-offset", action="store_true", help="fit a pressure offset (pressure control)")
+    p.add_argument("--points", type=_points, default=DEFAULT_POINTS, help="rows per computed history")
+    p.add_argument("--no-profile", action="store_true", help="covariance intervals only (faster)")
+    p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
+    p.set_defaults(run=run_fit)
+    return p
+
+
+def _x_offset(args, control: str) -> bool:
+    if args.no_offset and args.pressure_offset:
+        raise InputError("--no-offset", True, "absent when --pressure-offset is given")
+    if control == "displacement":
+        if args.pressure_offset:
+            raise InputError("--pressure-offset", True, "used with pressure control only")
+        return not args.no_offset
+    return bool(args.pressure_offset)
+
+
+def run_fit(args) -> int:
+    """Run ``adhfit fit`` from parsed arguments; returns the exit status."""
+    from ..data import read_curve  # noqa: PLC0415
+    from ..report.fit_plot import plot_fit  # noqa: PLC0415
+    from ..report.json_report import write_json  # noqa: PLC0415
+    from ..report.markdown import write_markdown  # noqa: PLC0415
+    from ..scene import load_scene  # noqa: PLC0415
+    from ..units import parse_quantity  # noqa: PLC0415
+    from .fit import fit_curve  # noqa: PLC0415
+    if args.method == "mcmc":
+        raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
+    sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
+    scene = load_scene(args.scene)
+    curve = read_curve(args.data, scene.control)
+    result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
+                       fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
+                       seed=args.seed, points=args.points, profile=not args.no_profile)
+    out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(result, out / "report.json")
+    write_markdown(result, out / "report.md")
+    if not args.no_plot:
+        plot_fit(result, path=out / "fit.png")
+    print(_summary(result, out))
+    return 0
+
+
+def _summary(result, out: Path) -> str:
+    lines = [f"slip: {result.slip['verdict']}"]
+    for e in result.parameters.values():
+        ci = "" if e.ci95 is None else f"  95 % [{e.ci95[0]:.5g}, {e.ci95[1]:.5g}]"
+        se = "" if e.stderr is None else f" ± {e.stderr:.2g}"
+        lines.append(f"{e.name} = {e.value:.5g}{se} {e.unit}{ci}")
+    lines.append(f"{len(result.warnings)} warning(s); {result.n_evaluations} model evaluations, "
+                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, fit.png")
+    return "\n".join(lines)

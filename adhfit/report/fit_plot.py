@@ -1,0 +1,104 @@
+"""fit.png: the data, both fitted curves, the stages shaded, and the residuals of the reported fit.
+
+Draws from a :class:`~adhfit.fitting.result.FitResult`'s stored predictions and model curves; never
+re-runs a fit.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .plots import STAGE_COLORS, _pyplot
+
+__all__ = ["plot_fit"]
+
+_SLIP_STYLE = {"no-slip": ("k", "-"), "frictionless": ("#9467bd", "--")}
+
+
+def _axis(control: str):
+    return (1e6, "displacement (µm, measured)") if control == "displacement" else (1e-3, "pressure (kPa)")
+
+
+def _shade(ax, curve: dict, kx: float) -> None:
+    if not curve:
+        return
+    spans = (("making_contact", curve["x_contact"], curve["x_onset"]),
+             ("pinning", curve["x_onset"], float(np.max(curve["x_loading"]))),
+             ("delamination", curve["x_turning_point"], curve["x_onset"]))
+    for name, lo, hi in spans[1:]:
+        ax.axvspan(lo * kx, hi * kx, color=STAGE_COLORS[name], alpha=0.07, lw=0,
+                   label=f"{name} (reported fit, unloading)")
+    ax.axvline(curve["x_contact"] * kx, color=STAGE_COLORS["making_contact"], lw=0.7, ls=":",
+               label="contact (reported fit)")
+
+
+def _main(ax, result, kx: float) -> None:
+    c = result.curve
+    seg = result.segments
+    n = len(c.x)
+    idx = np.arange(n)
+    load, det = idx <= seg["i_turn"], (idx >= seg["i_jump"]) if seg["i_jump"] is not None else np.zeros(n, bool)
+    att = ~load & ~det
+    for mask, color, label in ((load, "#1f77b4", "data: loading"), (att, "#d62728", "data: unloading"),
+                               (det, "0.5", "data: after pull-off")):
+        if mask.any():
+            ax.plot(c.x[mask] * kx, c.force[mask] * 1e3, ".", ms=3, color=color, label=label)
+    for slip, fit in result.fits.items():
+        mc = fit.model_curve
+        if not mc:
+            continue
+        color, ls = _SLIP_STYLE.get(slip, ("k", "-"))
+        ax.plot(np.asarray(mc["x_loading"]) * kx, np.asarray(mc["force_loading"]) * 1e3, ls, color=color, lw=1.1,
+                label=f"fit: {slip}" + (" (reported)" if slip == result.reported_slip else ""))
+        ax.plot(np.asarray(mc["x_unloading"]) * kx, np.asarray(mc["force_unloading"]) * 1e3, ls, color=color, lw=1.1)
+        ax.plot([mc["x_turning_point"] * kx] * 2, [mc["force_turning_point"] * 1e3, 0.0], ":", color=color, lw=0.8)
+    _shade(ax, result.fits[result.reported_slip].model_curve, kx)
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.set_ylabel("force (mN, compressive positive)")
+    ax.set_title(f"{result.slip['verdict']}", fontsize=10)
+    ax.legend(fontsize=7, ncol=2)
+
+
+def plot_fit(result, *, ax=None, path: str | Path | None = None, residuals: bool = True):
+    """Plot a fit result.
+
+    Parameters
+    ----------
+    result : FitResult
+    ax : matplotlib Axes, optional
+        Draw the main panel here (no residual panel); a new figure with a residual panel otherwise.
+    path : path, optional
+        Save the figure there.
+    residuals : bool
+        Add the residual panel (new figures only).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The main panel.
+    """
+    plt = _pyplot()
+    kx, xlabel = _axis(result.curve.control)
+    rax = None
+    if ax is None:
+        if residuals:
+            fig, (ax, rax) = plt.subplots(2, 1, figsize=(7.0, 6.2), sharex=True, layout="constrained",
+                                          gridspec_kw={"height_ratios": (3, 1)})
+        else:
+            fig, ax = plt.subplots(figsize=(7.0, 4.6), layout="constrained")
+    _main(ax, result, kx)
+    if rax is not None:
+        c = result.curve
+        for slip, fit in result.fits.items():
+            color, _ = _SLIP_STYLE.get(slip, ("k", "-"))
+            rax.plot(c.x * kx, (c.force - fit.predicted) * 1e3, ".", ms=2.5, color=color, label=slip)
+        rax.axhline(0.0, color="0.6", lw=0.6)
+        rax.set_ylabel("residual (mN)")
+        rax.set_xlabel(xlabel)
+        rax.legend(fontsize=7)
+    else:
+        ax.set_xlabel(xlabel)
+    if path is not None:
+        ax.figure.savefig(path, dpi=130)
+    return ax

@@ -1,0 +1,39 @@
+"""report.json (DESIGN.md A5): the fit result as JSON, SI values, never NaN."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+__all__ = ["report_dict", "write_json"]
+
+
+def _has_null_numbers(d, path=""):
+    """Paths of keys whose value is None inside "parameters" (numbers that could not be computed)."""
+    out = []
+    if isinstance(d, dict):
+        for k, v in d.items():
+            out += _has_null_numbers(v, f"{path}.{k}" if path else k)
+    elif d is None and path.split(".")[-1] in ("value", "stderr", "ci95"):
+        out.append(path)
+    return out
+
+
+def report_dict(result) -> dict:
+    """The report.json content of a :class:`~adhfit.fitting.result.FitResult`.
+
+    Every non-finite number becomes ``null``; when an estimate or its error is null, a warning
+    saying so is added (a null must never pass unexplained).
+    """
+    d = result.as_dict()
+    missing = _has_null_numbers(d.get("parameters", {}), "parameters")
+    if missing:
+        d["warnings"] = list(d["warnings"]) + [f"not computed (null in this report): {', '.join(missing)}"]
+    return d
+
+
+def write_json(result, path: str | Path) -> Path:
+    """Write report.json; ``allow_nan=False`` guarantees strict JSON."""
+    path = Path(path)
+    path.write_text(json.dumps(report_dict(result), indent=2, allow_nan=False, ensure_ascii=False) + "\n",
+                    encoding="utf-8")
+    return path
