@@ -11,8 +11,7 @@ import argparse
 from pathlib import Path
 
 from ..errors import InputError
-from .fit import METHODS, SLIP_CHOICES
-from .model import DEFAULT_POINTS
+from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
 
 __all__ = ["add_fit_arguments", "run_fit"]
 
@@ -40,10 +39,14 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
         "fit", help="fit W_ad, mu*h and the slip condition to a measured curve",
         description="Fit the work of adhesion W_ad, the membrane stiffness mu*h and the interface slip "
                     "condition to a measured force curve (DESIGN.md A5). Writes OUTDIR/report.json, "
-                    "report.md and fit.png.")
-    p.add_argument("data", type=Path, metavar="DATA.csv", help="measured curve (CSV, 'name [unit]' headers)")
-    p.add_argument("--scene", type=Path, required=True, metavar="SCENE.toml",
-                   help="scene file: geometry and the fixed pressure or gap")
+                    "report.md, report.html and fit.png. Several files or a folder: one fit per curve and "
+                    "OUTDIR/summary.csv (see adhfit.fitting.batch).")
+    p.add_argument("data", type=Path, nargs="+", metavar="DATA",
+                   help="measured curve (CSV, 'name [unit]' headers); several files or folders: a batch "
+                        "with OUTDIR/summary.csv (exit 1 if any curve failed)")
+    p.add_argument("--scene", type=Path, default=None, metavar="SCENE.toml",
+                   help="scene file: geometry and the fixed pressure or gap (default: the nearest "
+                        "scene.toml in the curve's folder or, for a folder argument, its parents)")
     p.add_argument("--method", choices=METHODS, default="lsq", help="lsq (least squares); mcmc: not yet")
     p.add_argument("--slip", choices=SLIP_CHOICES, default=None,
                    help="slip condition; default: the scene's (auto = fit both and compare)")
@@ -82,6 +85,13 @@ def run_fit(args) -> int:
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
     from .fit import fit_curve  # noqa: PLC0415
+    from . import batch  # noqa: PLC0415
+    if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
+        if batch.is_batch(args.data):
+            return batch.run_batch(args, run_fit)
+        args.data = args.data[0]
+    if args.scene is None:
+        args.scene = batch.single_scene(args.data)
     if args.method == "mcmc":
         raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
@@ -96,6 +106,8 @@ def run_fit(args) -> int:
     write_markdown(result, out / "report.md")
     if not args.no_plot:
         plot_fit(result, path=out / "fit.png")
+    from ..report.html import write_html  # noqa: PLC0415
+    write_html(result, out / "report.html", images={} if args.no_plot else {"fit.png": out / "fit.png"})
     print(_summary(result, out))
     return 0
 
@@ -107,5 +119,5 @@ def _summary(result, out: Path) -> str:
         se = "" if e.stderr is None else f" ± {e.stderr:.2g}"
         lines.append(f"{e.name} = {e.value:.5g}{se} {e.unit}{ci}")
     lines.append(f"{len(result.warnings)} warning(s); {result.n_evaluations} model evaluations, "
-                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, fit.png")
+                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, report.html, fit.png")
     return "\n".join(lines)

@@ -14,7 +14,8 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from .model import DEFAULT_POINTS, CurveModel, segment
+from .model import CurveModel, segment
+from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
 from .lsq import fit_slip
 from .result import Estimate, FitResult, SlipFit
 from .selection import compare
@@ -22,8 +23,6 @@ from .summary import summarize
 
 __all__ = ["fit_curve", "METHODS", "SIGMA_ESTIMATED"]
 
-METHODS = ("lsq", "mcmc")
-SLIP_CHOICES = ("auto", "no-slip", "frictionless")
 SIGMA_ESTIMATED = "estimated from the residuals (lmfit scales the covariance by the reduced chi-square)"
 #: w = W_ad/μh within this fraction of the table's upper bound earns a warning
 _W_EDGE = 0.98

@@ -41,6 +41,7 @@ from scipy.interpolate import PchipInterpolator
 
 from ..errors import AdhfitError, InputError
 from ..simulation import simulate
+from .options import DEFAULT_POINTS
 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
            "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS"]
@@ -49,8 +50,6 @@ __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelD
 CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
 #: name of the control-variable offset (a row of adhfit.params.FITTED) per control mode
 OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offset"}
-#: rows per computed history: interpolation error ~1e-4 of the largest force (module docstring)
-DEFAULT_POINTS = 150
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
 #: succeed at a neighbouring one; the interpolants differ by ~1e-4 of the force, far below the noise)
 RETRY_POINTS = (0, 7, 19)
@@ -393,12 +392,3 @@ class CurveModel:
         k = int(np.argmin(xd))
         spacing = float(np.median(np.abs(np.diff(xd))))
         return bool(xd[k] - pcs.x_tp < fraction * spacing)
-
-
-def finite_or_none(x) -> float | None:
-    """A float, or None when not finite (JSON has no NaN)."""
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return None
-    return v if math.isfinite(v) else None
