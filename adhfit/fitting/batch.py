@@ -1,0 +1,251 @@
+"""``adhfit fit`` over several curves: one summary table, and a bad file never stops the run.
+
+Which files
+    Every argument is a CSV file or a folder.  A folder stands for every ``*.csv`` file below it
+    (recursively, sorted; hidden files and folders and the output directory are skipped).  The run is a
+    *batch* when there are several files or any folder; a single file is an ordinary fit.
+
+Which scene (when ``--scene`` is not given)
+    Each curve uses the nearest ``scene.toml``: in its own folder, else in the parent folders up to the
+    folder given on the command line (for a file argument: its own folder only).  So a folder of sample
+    subfolders, each with its ``curve.csv`` and ``scene.toml``, fits in one command, and one
+    ``scene.toml`` at the top of a folder serves every curve below it that has none of its own.
+    ``--scene`` given: that scene for every curve.  A curve without a scene is a failed row.
+
+Outputs (batch)
+    ``OUTDIR/summary.csv``: one row per curve (:data:`COLUMNS`; values in SI: W_ad in J/m², μh in N/m),
+    written even when fits fail; each curve's own reports (report.json, report.md, report.html,
+    fit.png) in ``OUTDIR/<path of the curve relative to the common folder, without .csv>/``.
+
+Exit status
+    0 when every curve was fitted; 1 when at least one failed (the table lists it with its error, the
+    other curves' reports are written, and standard error ends with the list of failures); 2 for
+    invalid command-line input (nothing found to fit, unreadable ``--scene``).
+"""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import sys
+import time
+from argparse import Namespace
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping
+
+from ..errors import AdhfitError, InputError
+
+__all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
+           "run_batch", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED"]
+
+SCENE_NAME = "scene.toml"
+EXIT_SOME_FAILED = 1
+_PARAMS = ("work_of_adhesion", "mu_h")
+#: summary.csv columns, in order
+COLUMNS = (["file", "status", "error"]
+           + [f"{p}{s}" for p in _PARAMS for s in ("", "_stderr", "_ci95_low", "_ci95_high")]
+           + ["slip_selected", "slip_verdict", "slip_reported", "delta_bic", "redchi", "n_warnings", "warnings",
+              "report_dir", "scene", "sha256", "adhfit_version", "method", "seed", "wall_time_s"])
+
+
+@dataclass(frozen=True)
+class Job:
+    """One curve of a batch: the data file, its scene (None: not found) and its output folder."""
+
+    data: Path
+    scene: Path | None
+    out: Path
+    scene_note: str = ""
+
+
+def is_batch(data: Iterable[Path]) -> bool:
+    """True for several arguments or any folder."""
+    data = list(data)
+    return len(data) != 1 or Path(data[0]).is_dir()
+
+
+def _skip(path: Path, root: Path, outdir: Path | None) -> bool:
+    rel = path.relative_to(root).parts
+    if any(part.startswith(".") for part in rel):
+        return True
+    if outdir is not None:
+        try:
+            path.resolve().relative_to(outdir.resolve())
+            return True
+        except ValueError:
+            pass
+    return False
+
+
+def _nearest_scene(csv_path: Path, root: Path) -> Path | None:
+    folder = csv_path.parent
+    root = root.resolve()
+    while True:
+        candidate = folder / SCENE_NAME
+        if candidate.is_file():
+            return candidate
+        if folder.resolve() == root or folder.resolve() == folder.resolve().parent:
+            return None
+        folder = folder.parent
+
+
+def discover(paths: Iterable[str | Path], *, scene: str | Path | None = None,
+             outdir: str | Path | None = None) -> list[Job]:
+    """The curves to fit, each with its scene and output folder (rules in the module docstring).
+
+    Raises
+    ------
+    InputError
+        A path that does not exist, or no CSV file at all.
+    """
+    found: list[tuple[Path, Path]] = []  # (csv, the root it was found under)
+    outdir = None if outdir is None else Path(outdir)
+    for raw in paths:
+        p = Path(raw)
+        if p.is_dir():
+            files = sorted(f for f in p.rglob("*.csv") if f.is_file() and not _skip(f, p, outdir))
+            found += [(f, p) for f in files]
+        elif p.is_file():
+            found.append((p, p.parent))
+        else:
+            raise InputError("DATA", str(p), "an existing CSV file or folder")
+    if not found:
+        raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one *.csv file")
+    seen, unique = set(), []
+    for f, root in found:
+        key = f.resolve()
+        if key not in seen:
+            seen.add(key)
+            unique.append((f, root))
+    base = Path(os.path.commonpath([str(r.resolve()) for _, r in unique]))
+    out = Path(outdir) if outdir is not None else Path("adhfit_fit")
+    jobs = []
+    for f, root in unique:
+        rel = f.resolve().relative_to(base).with_suffix("")
+        if scene is not None:
+            sc, note = Path(scene), "--scene"
+        else:
+            sc = _nearest_scene(f, root)
+            note = "nearest scene.toml" if sc else (f"no {SCENE_NAME} next to the file or in a parent folder "
+                                                     f"up to {root}; give --scene")
+        jobs.append(Job(data=f, scene=sc, out=out / rel, scene_note=note))
+    return jobs
+
+
+def single_scene(data: str | Path) -> Path:
+    """The scene of a single-curve fit without ``--scene``: ``scene.toml`` next to the data file."""
+    candidate = Path(data).parent / SCENE_NAME
+    if not candidate.is_file():
+        raise InputError("--scene", None, f"a scene file: give --scene SCENE.toml or put {SCENE_NAME} next to "
+                                          f"{data}")
+    return candidate
+
+
+def _ci(e: Mapping[str, Any]) -> tuple[Any, Any]:
+    ci = e.get("ci95") or (None, None)
+    return ci[0], ci[1]
+
+
+def summary_row(job: Job, report: Mapping[str, Any]) -> dict[str, Any]:
+    """The summary.csv row of a fitted curve, from its report.json dictionary (DESIGN.md A5)."""
+    slip = report.get("slip", {}) or {}
+    prov = report.get("provenance", {}) or {}
+    row: dict[str, Any] = {"file": str(job.data), "status": "ok", "error": ""}
+    for name in _PARAMS:
+        e = report.get("parameters", {}).get(name, {}) or {}
+        lo, hi = _ci(e)
+        row.update({name: e.get("value"), f"{name}_stderr": e.get("stderr"), f"{name}_ci95_low": lo,
+                    f"{name}_ci95_high": hi})
+    fits = report.get("fits", {}) or {}
+    reported = slip.get("parameters_from") or slip.get("selected") or next(iter(fits), None)
+    warnings = list(report.get("warnings", []) or [])
+    row.update({"slip_selected": slip.get("selected") or "", "slip_verdict": slip.get("verdict", ""),
+                "slip_reported": reported or "", "delta_bic": slip.get("delta_bic"),
+                "redchi": (fits.get(reported) or {}).get("redchi") if reported else None,
+                "n_warnings": len(warnings), "warnings": " | ".join(warnings), "report_dir": str(job.out),
+                "scene": str(job.scene), "sha256": prov.get("input_sha256", ""),
+                "adhfit_version": prov.get("adhfit_version", ""), "method": report.get("method", ""),
+                "seed": prov.get("seed"), "wall_time_s": report.get("wall_time_s")})
+    return row
+
+
+def failed_row(job: Job, error: BaseException | str, *, method: str = "", seed: Any = None) -> dict[str, Any]:
+    """The summary.csv row of a curve that could not be fitted."""
+    import hashlib  # noqa: PLC0415
+    from .. import __version__  # noqa: PLC0415
+    try:
+        sha = hashlib.sha256(Path(job.data).read_bytes()).hexdigest()
+    except OSError:
+        sha = ""
+    if isinstance(error, (str, AdhfitError)):  # adhfit's own errors already say what and where
+        message = str(error)
+    else:
+        message = f"{type(error).__name__}: {error}"
+    return {"file": str(job.data), "status": "failed", "error": " ".join(str(message).split()),
+            "report_dir": str(job.out), "scene": "" if job.scene is None else str(job.scene), "sha256": sha,
+            "adhfit_version": __version__, "method": method, "seed": seed}
+
+
+def _cell(v: Any) -> Any:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return repr(v)
+    return v
+
+
+def write_summary(rows: list[Mapping[str, Any]], path: str | Path) -> Path:
+    """Write summary.csv (:data:`COLUMNS`; empty cells where a value is missing)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: _cell(r.get(k)) for k in COLUMNS})
+    return path
+
+
+def _default_outdir(data: list[Path]) -> Path:
+    if len(data) == 1 and data[0].is_dir():
+        return Path(f"{data[0].resolve().name}_fit")
+    return Path("adhfit_fit")
+
+
+def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
+    """Fit every curve of ``args.data`` with ``fit_one`` (the single-curve ``adhfit fit``); returns the exit
+    status.  Prints one line per curve and, at the end, the failures, on standard error."""
+    data = [Path(p) for p in args.data]
+    outdir = args.output if args.output is not None else _default_outdir(data)
+    if args.scene is not None and not Path(args.scene).is_file():
+        raise InputError("--scene", str(args.scene), "an existing scene file (TOML)")
+    jobs = discover(data, scene=args.scene, outdir=outdir)
+    rows, failures = [], []
+    t0 = time.perf_counter()
+    for i, job in enumerate(jobs, 1):
+        print(f"[{i}/{len(jobs)}] {job.data}", file=sys.stderr, flush=True)
+        try:
+            if job.scene is None:
+                raise InputError("scene", None, f"a scene file ({job.scene_note})")
+            one = Namespace(**{**vars(args), "data": job.data, "scene": job.scene, "output": job.out})
+            status = fit_one(one)
+            if status != 0:
+                raise RuntimeError(f"the fit ended with exit status {status}")
+            report = json.loads((job.out / "report.json").read_text(encoding="utf-8"))
+            rows.append(summary_row(job, report))
+        except KeyboardInterrupt:
+            raise
+        except Exception as err:  # noqa: BLE001 - one bad curve must not stop the batch; it is listed
+            rows.append(failed_row(job, err, method=args.method, seed=args.seed))
+            failures.append((job, rows[-1]["error"]))
+            print(f"    failed: {rows[-1]['error']}", file=sys.stderr, flush=True)
+    table = write_summary(rows, Path(outdir) / "summary.csv")
+    ok = len(jobs) - len(failures)
+    print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - t0:.1f} s; wrote {table}")
+    if failures:
+        print(f"adhfit: {len(failures)} of {len(jobs)} curves failed (listed in {table}):", file=sys.stderr)
+        for job, message in failures:
+            print(f"  {job.data}: {message}", file=sys.stderr)
+        return EXIT_SOME_FAILED
+    return 0
