@@ -126,8 +126,8 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     points : int
         Rows per computed history.
     profile : bool
-        Compute likelihood-profile intervals of W_ad and μh of the reported fit (of both fits when
-        the slip condition is undecided); the other fit's intervals are from its covariance.
+        Compute likelihood-profile intervals of W_ad and μh of the reported fit; the other fit's
+        intervals are from its covariance (an undecided verdict reports the hull of both).
 
     Returns
     -------
@@ -145,12 +145,12 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         extra = [r.par.si(r.best.params) for r in raws.values()]
         raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
                            extra_starts=extra)
-    # profiles cost ~2/3 of a fit: compute them only where the reported estimates come from
+    # profiles cost ~2/3 of a fit: compute them only for the fit whose estimates are reported
     fits = {s: summarize(r, profile=False) for s, r in raws.items()}
     verdict = compare({s: f.bic for s, f in fits.items()}, {s: f.aic for s, f in fits.items()})
-    if profile:
-        wanted = [verdict["parameters_from"]] if verdict["selected"] is not None else list(fits)
-        fits.update({s: summarize(raws[s], profile=True) for s in wanted})
+    if profile:  # the reported fit only; an undecided verdict hulls with the other's covariance interval
+        wanted = verdict["parameters_from"]
+        fits[wanted] = summarize(raws[wanted], profile=True)
     rep = fits[verdict["parameters_from"]]
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
                "fit_force_offset": fit_force_offset, "points": points, "profile": profile}

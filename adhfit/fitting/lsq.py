@@ -134,7 +134,7 @@ def minimise(residual, params: lmfit.Parameters, *, scale_covar: bool, max_nfev:
     """One lmfit ``least_squares`` run (TRF, 2-point Jacobian with step :data:`DIFF_STEP`).
 
     ``tol`` is scipy's ftol = xtol = gtol: 1e-10 for optima; the profile's sub-fits need only the
-    χ² to ~1e-5 relative (a few hundredths of σ² on ~10² rows).
+    χ² to ~1e-4 relative (a few hundredths of σ² on ~10² rows).
     """
     mini = lmfit.Minimizer(residual, params, scale_covar=scale_covar)
     return mini.minimize(method="least_squares", max_nfev=max_nfev, diff_step=DIFF_STEP,

@@ -31,7 +31,7 @@ __all__ = ["ProfileLimit", "profile_interval", "critical_value"]
 TOL = 0.03
 MAX_SUBFITS = 6
 #: tolerance of the sub-fits (see lsq.minimise)
-SUBFIT_TOL = 1e-6
+SUBFIT_TOL = 1e-5
 
 
 @dataclass(frozen=True)
