@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .core import delamination
-from .core.backend import check_ok, derivative, evaluate, solve_state
+from .core.backend import check_ok, evaluate, extremum, follow, solve_state
 from .core.branches import BRANCHES, Context
 from .core.inflation import apex_deflection, critical_pressure
 from .core.solve import newton
@@ -249,120 +249,14 @@ def _pinning_path(slip, ctx, kappa_m, d_fix):
 def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000, allow_end=False):
     """Follow a branch from locator l0 (solved: x0, k0) through ``targets`` (continuation).
 
-    ``d_fix`` None means displacement control (kappa fixed at k0); else kappa is solved from the gap.
-
-    Steps are taken in the locator (``log=False``) or in its logarithm (``log=True``, for the contact
-    radius on the way to detachment) and land exactly on every target; each state starts from a linear
-    extrapolation of the last two; a failed or out-of-domain step is halved.
-
-    ``allow_end``: where the branch itself ends before the last target (no-slip delamination can,
-    see :func:`history`), return the path up to its end (located to ~1e-10 of the span) instead of
-    raising; the targets not reached are then missing from ``at_targets``.
-
-    Returns
-    -------
-    at_targets, path : tuple of ndarray
-        (locators, x, kappa) at the targets, in order, and at every accepted step (predictors for
-        later solves); x is NaN on explicit branches.
+    See :func:`adhfit.core.continuation.follow` (one compiled call under the numba backend).
     """
-    fwd, back = (np.log, np.exp) if log else ((lambda z: z), (lambda z: z))
-    targets = np.atleast_1d(np.asarray(targets, float))
-    ss = [fwd(l0)]
-    xs, ks = [np.nan if x0 is None else float(x0)], [float(k0)]
-    span = abs(fwd(targets[-1]) - ss[0]) or 1.0
-    h = span / 16.0
-    out, i, steps = [], 0, 0
-    while i < targets.size:
-        steps += 1
-        if steps > max_steps:
-            raise ConvergenceError(f"{branch.stage} ({branch.slip}): too many continuation steps",
-                                   {"locator": float(back(ss[-1])), "d": d_fix, "w": ctx.w})
-        goal = fwd(targets[i])
-        gap_ = goal - ss[-1]
-        s_new = goal if abs(gap_) <= h else ss[-1] + np.sign(gap_) * h
-        if len(ss) > 1 and ss[-1] != ss[-2]:
-            r = (s_new - ss[-1]) / (ss[-1] - ss[-2])
-            xg, kg = xs[-1] + r * (xs[-1] - xs[-2]), ks[-1] + r * (ks[-1] - ks[-2])
-        else:
-            xg, kg = xs[-1], ks[-1]
-        loc = np.array([back(s_new)])
-        try:
-            if d_fix is None:  # displacement control: kappa stays k0
-                x, k = solve_state(branch, loc, ctx, kappa=np.array([k0]),
-                                   x0=None if branch.target is None else np.array([xg]))
-            else:
-                x, k = solve_state(branch, loc, ctx, d_fix=d_fix, kappa0=np.array([kg]),
-                                   x0=None if branch.target is None else np.array([xg]))
-            st = evaluate(branch, x, k, loc, ctx)
-            good = bool(st["ok"][0]) and bool(np.isfinite(np.real(st["f"][0])))
-        except ConvergenceError:
-            good = False
-        if not good:
-            h *= 0.5
-            if h < 1e-10 * span:
-                if allow_end and len(ss) > 1:
-                    break
-                raise ConvergenceError(f"{branch.stage} ({branch.slip}): continuation "
-                                       f"stalled (the state leaves the model's domain)",
-                                       {"locator": float(back(ss[-1])), "kappa": ks[-1], "d": d_fix,
-                                        "w": ctx.w})
-            continue
-        ss.append(s_new)
-        xs.append(np.nan if x is None else float(x[0]))
-        ks.append(float(k[0]))
-        if s_new == goal:
-            out.append((targets[i], xs[-1], ks[-1]))
-            i += 1
-        h = min(1.6 * h, span / 8.0)
-    path = (back(np.array(ss)), np.array(xs), np.array(ks))
-    if not out:
-        return (np.array([]), np.array([]), np.array([])), path
-    return tuple(np.array(v) for v in zip(*out)), path
+    return follow(branch, l0, targets, x0, k0, ctx, d_fix, log=log, max_steps=max_steps,
+                  allow_end=allow_end)
 
 
 # ----------------------------------------------------------------------------------------------
 # extrema
-
-
-def _safe(fun, z):
-    try:
-        return fun(z)
-    except ConvergenceError:
-        return np.nan
-
-
-def _extremum(branch, lo, hi, ctx, pc, kappa, d_fix, key, sign, rows):
-    """Locator in [lo, hi] where ``key`` (or kappa) is extremal: brentq on its exact derivative.
-
-    ``rows`` = (locators, x, kappa) of solved rows around [lo, hi]: predictors by interpolation.
-    """
-    order = np.argsort(rows[0])
-    rl, rx, rk = (np.asarray(r, float)[order] for r in rows)
-
-    def solve(loc):
-        kg = np.array([np.interp(loc, rl, rk)])
-        xg = None if branch.target is None else np.array([np.interp(loc, rl, rx)])
-        return _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)
-
-    def slope(loc):
-        x, k = solve(loc)
-        return float(derivative(branch, np.array([loc]), ctx, x, k, pressure_control=pc)[key][0])
-
-    def value(loc):
-        try:
-            st = evaluate(branch, *solve(loc), np.array([loc]), ctx)
-        except ConvergenceError:
-            return -np.inf
-        v = sign * float(np.real(st[key][0]))
-        finite = all(np.isfinite(np.real(st[k][0])) for k in _KEYS)
-        return v if (bool(st["ok"][0]) and finite) else -np.inf  # only admissible states compete
-
-    candidates = [lo, hi]
-    s_lo, s_hi = (_safe(slope, z) for z in (lo, hi))
-    if np.isfinite(s_lo) and np.isfinite(s_hi) and s_lo * s_hi < 0:
-        candidates.append(brentq(slope, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200))
-    # the extremum of a smooth function on [lo, hi] is a stationary point or an end
-    return max(candidates, key=value)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -506,15 +400,12 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
         lo = locs[i - 1] if i > 0 else (0.0 if stage == "pinning" else float(np.real(onset["a"][0])))
         hi = locs[i + 1] if i + 1 < locs.size else locs[i]
         j0, j1 = max(i - 2, 0), min(i + 3, locs.size)
-        rows = (locs[j0:j1], np.full(j1 - j0, np.nan) if xs is None else xs[j0:j1],
-                np.real(st["p"][j0:j1]))
-        loc = _extremum(branch, min(lo, hi), max(lo, hi), ctx, pc, kappa, d_fix, key,
-                        sign, rows) if lo != hi else locs[i]
-        kg = np.array([np.interp(loc, np.sort(rows[0]), rows[2][np.argsort(rows[0])])])
-        xg = None if xs is None else np.array([np.interp(loc, np.sort(rows[0]),
-                                                          rows[1][np.argsort(rows[0])])])
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)
-        solved = evaluate(branch, x, k, np.array([loc]), ctx)
+        rl = locs[j0:j1]
+        order = np.argsort(rl)
+        rows = (rl[order], (np.full(j1 - j0, np.nan) if xs is None else xs[j0:j1])[order],
+                np.real(st["p"][j0:j1])[order])
+        lo, hi = (min(lo, hi), max(lo, hi)) if lo != hi else (locs[i], locs[i])
+        loc, solved = extremum(branch, lo, hi, ctx, d_fix if pc else None, kappa, key, sign, rows)
         check_ok(solved, name.replace("_", " "), {"stage": stage, branch.locator: float(loc)})
         state = _real(solved, 0)
         out[name] = (stage, float(loc), state)

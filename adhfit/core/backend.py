@@ -19,10 +19,11 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..errors import ConvergenceError
-from . import branches
+from . import branches, continuation
 from .branches import Branch, Context
 
-__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "active", "use", "ENV"]
+__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "follow", "extremum", "active", "use",
+           "ENV"]
 
 #: environment variable that selects the backend
 ENV = "ADHFIT_BACKEND"
@@ -228,3 +229,80 @@ def check_ok(state: dict, what: str, inputs: dict) -> None:
         raise ConvergenceError(f"{what}: state outside the model's domain (free membrane past "
                                f"vertical at the clamp, or no real solution)",
                                {**inputs, "index": i})
+
+
+# ----------------------------------------------------------------------------------------------
+# continuation and extrema (continuation.py / compiled_paths.py)
+
+_PATHS = None
+
+
+def _paths():
+    global _PATHS
+    if _PATHS is None:
+        from . import compiled_paths
+        _PATHS = compiled_paths
+    return _PATHS
+
+
+def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: bool,
+           max_steps: int = 2000, allow_end: bool = False):
+    """Follow a branch from a solved state through target locators (see :func:`.continuation.follow`).
+
+    Returns
+    -------
+    at_targets, path : tuple of ndarray
+        (locators, x, kappa) at the targets reached and at every accepted step.
+    """
+    K = _compiled()
+    if K is None:
+        return continuation.follow(branch, l0, targets, x0, k0, ctx, d_fix, log=log,
+                                   max_steps=max_steps, allow_end=allow_end)
+    P = _paths()
+    targets = np.atleast_1d(np.asarray(targets, float))
+    c, w, a_m, L_m = _ctx(ctx)
+    pressure = d_fix is not None
+    status, n_out, ox, ok_, pl, px, pk = P.follow_kernel(
+        _code(branch), pressure, float(l0), targets, math.nan if x0 is None else float(x0),
+        float(k0), c, w, a_m, L_m, float(d_fix) if pressure else 0.0, bool(log), int(max_steps),
+        bool(allow_end))
+    if status == P.F_STEPS:
+        raise ConvergenceError(f"{branch.stage} ({branch.slip}): too many continuation steps",
+                               {"locator": float(pl[-1]), "d": d_fix, "w": ctx.w})
+    if status == P.F_STALLED:
+        raise ConvergenceError(f"{branch.stage} ({branch.slip}): continuation stalled (the state "
+                               f"leaves the model's domain)",
+                               {"locator": float(pl[-1]), "kappa": float(pk[-1]), "d": d_fix,
+                                "w": ctx.w})
+    return (targets[:n_out], ox[:n_out], ok_[:n_out]), (pl, px, pk)
+
+
+def extremum(branch: Branch, lo: float, hi: float, ctx: Context, d_fix, kappa, key: str,
+             sign: float, rows):
+    """The state in [lo, hi] where ``sign * key`` is largest (see :func:`.continuation.extremum`).
+
+    Returns
+    -------
+    loc, state : float, dict
+        ``state`` has ``a, alpha, p, d, f, G, J0`` (1-element float arrays) and ``ok``.
+    """
+    K = _compiled()
+    if K is None:
+        return continuation.extremum(branch, lo, hi, ctx, d_fix, kappa, key, sign, rows)
+    P = _paths()
+    rl, rx, rk = (np.ascontiguousarray(r, dtype=float) for r in rows)
+    c, w, a_m, L_m = _ctx(ctx)
+    pressure = d_fix is not None
+    status, loc, obs, ok = P.extremum_kernel(
+        _code(branch), pressure, float(lo), float(hi), rl, rx, rk,
+        0.0 if pressure else float(kappa), c, w, a_m, L_m, float(d_fix) if pressure else 0.0,
+        P.KEY_CODES[key], float(sign), continuation.BRENT_XTOL, continuation.BRENT_RTOL,
+        continuation.BRENT_MAXITER)
+    if status != P.E_OK:
+        what = {P.E_SOLVE: "the state does not solve", P.E_SEARCH: "a solve in the root search failed",
+                P.E_NOCONV: f"no convergence in {continuation.BRENT_MAXITER} iterations"}[status]
+        raise ConvergenceError(f"{branch.stage} ({branch.slip}): extremum of {key}: {what}",
+                               {"lo": float(lo), "hi": float(hi), branch.locator: float(loc)})
+    state = {k: obs[i:i + 1] for i, k in enumerate(_KEYS)}
+    state["ok"] = np.array([bool(ok)])
+    return float(loc), state
