@@ -388,6 +388,9 @@ def _solve_p(sc: Scene, gap_at: Callable[[float], float], p0: float, what: str) 
 
 def _row(sc: Scene, stage: str, a: float, alpha: float, p: float, d: float, c2: float, dd: float,
          g: float) -> dict:
+    if not math.isfinite(d):
+        raise BaselineError(f"{stage} at a={a!r}, alpha={alpha!r}, p={p!r}: outside the model's domain "
+                            "(Q <= 0 on the free membrane: its tangent turns vertical)")
     return dict(stage=stage, a=a, alpha=alpha, p=p, d=d, delta=d0_free(p) - d, f=-math.pi * dd, G=g,
                 c2=c2)
 
