@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import brentq
 
 from .core import delamination
-from .core.backend import check_ok, evaluate, extremum, follow, solve_state
+from .core.backend import check_ok, evaluate, extremum, follow, solve_rows, solve_state
 from .core.branches import BRANCHES, Context
 from .core.inflation import apex_deflection, critical_pressure
 from .core.solve import newton
@@ -31,6 +32,7 @@ COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 #: where the history stops on the way to detachment (a -> 0 is singular), relative to a_max
 A_END = 1e-3
 _KEYS = ("a", "alpha", "p", "d", "f", "G")
+_STAGE_LABELS = np.array(STAGES, dtype=object)
 
 
 @dataclass(frozen=True)
@@ -154,6 +156,25 @@ def _cluster(n):
     return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
 
 
+@lru_cache(maxsize=64)
+def _grids(points):
+    """The row grids of a history with ``points`` rows (cached, read-only).
+
+    Returns
+    -------
+    u_mc, u_pin, u_dl : ndarray
+        Making contact: a / a_max in (0, 1], clustered at both ends. Pinning: in (0, 1], dense toward
+        the onset only (the start of pinning is the end of loading). Delamination: the fraction of the
+        way from the onset back to the end, (1 - u)^1.5 with u clustered (denser toward the end).
+    """
+    n_mc, n_pin, n_del = _split(points)
+    u_pin = np.sin(0.5 * np.pi * np.arange(1, n_pin) / (n_pin - 1))
+    grids = (_cluster(n_mc)[1:], u_pin, (1.0 - _cluster(n_del)[1:]) ** 1.5)
+    for g in grids:
+        g.flags.writeable = False
+    return grids
+
+
 def _split(points):
     n_mc = max(4, round(0.3 * points))
     n_pin = max(4, round(0.2 * points))
@@ -169,15 +190,19 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
 
     ``start`` = (locator, x, kappa) of a solved state of the branch, from which pressure control
     follows the branch through the rows if the vectorised solve fails.
+
+    Returns
+    -------
+    x, kappa, state
+        The unknowns (None on explicit branches) and the observables (``evaluate`` output).
     """
     try:
-        x, k = solve_state(branch, locs, ctx, kappa=None if pc else kappa, d_fix=d_fix if pc else None,
-                           kappa0=kappa_guess, x0=x_guess)
-        st = evaluate(branch, x, k, locs, ctx)
-        if np.all(st["ok"]) and np.all(np.isfinite(np.real(st["f"]))):
-            return x, k
+        x, k, st = solve_rows(branch, locs, ctx, kappa=None if pc else kappa,
+                              d_fix=d_fix if pc else None, kappa0=kappa_guess, x0=x_guess)
+        if st["ok"].all() and np.isfinite(st["f"]).all():
+            return x, k, st
         if locs.size == 1 and start is None:
-            return x, k  # the caller's check_ok names the failure
+            return x, k, st  # the caller's check_ok names the failure
     except ConvergenceError:
         if locs.size == 1 and start is None:
             raise
@@ -186,7 +211,8 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
         l0, x0, k0 = start
         (_, xs, ks), _ = _follow(branch, l0, locs, x0, k0, ctx, d_fix if pc else None,
                                  log=branch.locator == "a")
-        return (None if branch.target is None else xs), ks
+        xs = None if branch.target is None else xs
+        return xs, ks, evaluate(branch, xs, ks, locs, ctx)
     # displacement control: each row starts from its predecessor
     xs, ks = np.empty(locs.shape), np.empty(locs.shape)
     x_prev = None
@@ -195,7 +221,8 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
         xs[i] = np.nan if x is None else x[0]
         ks[i] = k[0]
         x_prev = x
-    return (None if branch.target is None else xs), ks
+    xs = None if branch.target is None else xs
+    return xs, ks, evaluate(branch, xs, ks, locs, ctx)
 
 
 def _detachment_end(ctx, kappa):
@@ -305,16 +332,18 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     v["slip"] = slip
     d_fix = v.get("d")
     kappa_dc = v.get("p")
-    n_mc, n_pin, n_del = _split(v["points"])
-    ctx, kappa_m = _ctx_after_loading(v, c, pc)
+    u_mc, u_pin, u_dl = _grids(v["points"])
     info = {"control": control, "slip": slip, **{k: v[k] for k in v if k != "slip"}}
 
-    # 1. making contact, a in (0, a_m]; a = 0 is free inflation
+    # 1. making contact, a in (0, a_m]; a = 0 is free inflation. The last row is the end of loading
+    # (_cluster ends at 1.0 exactly), whose edge material coordinate L_m the later stages need.
     mc = BRANCHES[("making_contact", slip)]
-    a_mc = ctx.a_m * _cluster(n_mc)[1:]
+    a_mc = v["a_max"] * u_mc
     k_mc = _mc_pressure(a_mc, v, c) if pc else np.full(a_mc.shape, kappa_dc)
-    s_mc = evaluate(mc, None, k_mc, a_mc, ctx)
+    s_mc = evaluate(mc, None, k_mc, a_mc, Context(c, v["w"]))
+    check_ok({k: s_mc[k][-1:] for k in ("ok",) + _KEYS}, "end of loading", {"a_max": v["a_max"]})
     check_ok(s_mc, "making contact", info)
+    ctx, kappa_m = Context(c, v["w"], v["a_max"], float(s_mc["J0"][-1])), float(k_mc[-1])
     p0 = float(critical_pressure(d_fix)) if pc else kappa_dc
     free = {"a": 0.0, "alpha": 0.0, "p": p0, "d": d_fix if pc else float(apex_deflection(p0)),
             "f": 0.0, "G": 0.0}
@@ -329,13 +358,11 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     pin = BRANCHES[("pinning", slip)]
     end = _pin_end(slip, ctx)
     # dense toward the onset only: the start of pinning is the end of loading, and G ~ alpha^2 there
-    u = np.sin(0.5 * np.pi * np.arange(1, n_pin) / (n_pin - 1))
-    lp = end * (u * u if slip == "no-slip" else u)
+    lp = end * (u_pin * u_pin if slip == "no-slip" else u_pin)
     k_guess = np.interp(lp, path[0], path[2])  # predictors from the continuation path
     x_guess = np.interp(lp, path[0], path[1])
-    x_pin, k_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
-                               start=(path[0][0], path[1][0], path[2][0]))
-    s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
+    x_pin, k_pin, s_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
+                                      start=(path[0][0], path[1][0], path[2][0]))
     check_ok(s_pin, "pinning", info)
 
     # 4. delamination, a from a_on toward detachment (denser toward its end). No slip: the branch can
@@ -351,8 +378,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         if reached[0].size == 0:
             branch_end = float(dpath[0][-1])
             a_end = branch_end
-    u = _cluster(n_del)[1:]
-    a_dl = a_end + (a_on - a_end) * (1.0 - u) ** 1.5
+    a_dl = a_end + (a_on - a_end) * u_dl
     k_guess = np.full(a_dl.shape, k_on)
     if dpath is not None:
         order = np.argsort(dpath[0])
@@ -360,10 +386,9 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         if dl.target is not None:
             x_guess = np.interp(a_dl, dpath[0][order], dpath[1][order])
             x_guess[-1] = dpath[1][-1] if branch_end is not None else x_guess[-1]
-    x_dl, k_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
-                             start=(a_on, None if dl.target is None else
-                                    _delamination_start(slip, on_x, onset), k_on))
-    s_dl = evaluate(dl, x_dl, k_dl, a_dl, ctx)
+    x_dl, k_dl, s_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
+                                   start=(a_on, None if dl.target is None else
+                                          _delamination_start(slip, on_x, onset), k_on))
     check_ok(s_dl, "delamination", info)
 
     stages = {"pinning": (pin, lp, s_pin, x_pin), "delamination": (dl, a_dl, s_dl, x_dl)}
@@ -386,15 +411,13 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
     """
     out = {}
     # concatenated retraction path: onset is the last pinning row / first delamination row
-    path = []
-    for stage in ("pinning", "delamination"):
-        for i in range(stages[stage][1].size):
-            path.append((stage, i))
+    n_pin = stages["pinning"][1].size
     for name, key, sign in (("turning_point", "p" if pc else "d", -1.0 if pc else 1.0),
                             ("f_min", "f", -1.0)):
-        vals = np.array([sign * np.real(stages[s][2][key][i]) for s, i in path])
+        vals = sign * np.concatenate([np.real(stages["pinning"][2][key]),
+                                      np.real(stages["delamination"][2][key])])
         j = int(np.argmax(vals))
-        stage, i = path[j]
+        stage, i = ("pinning", j) if j < n_pin else ("delamination", j - n_pin)
         branch, locs, st, xs = stages[stage]
         # the extremum lies between the neighbours of the best row on its own branch
         lo = locs[i - 1] if i > 0 else (0.0 if stage == "pinning" else float(np.real(onset["a"][0])))
@@ -414,36 +437,40 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
 
 def _assemble(free, mc, pin, dl, extra, pc, d_fix):
     """Stack the stages in history order, insert the solved extrema, set ``delta`` and ``stable``."""
-    parts = {k: [np.array([free[k]])] for k in _KEYS}
-    stage, loc = [np.array(["making_contact"], dtype=object)], [np.array([0.0])]
-    for name, (lc, st) in (("making_contact", mc), ("pinning", pin), ("delamination", dl)):
-        for k in _KEYS:
-            parts[k].append(np.real(st[k]).astype(float) + 0.0)  # + 0.0 turns -0.0 into 0.0
-        loc.append(np.asarray(lc, float))
-        stage.append(np.full(loc[-1].size, name, dtype=object))
-    cols = {k: np.concatenate(v) for k, v in parts.items()}
-    cols["stage"], locs = np.concatenate(stage), np.concatenate(loc)
-    order = {"making_contact": 0, "pinning": 1, "delamination": 2}
-    # history position: stage rank, then alpha ascending (pinning) or a descending (delamination)
-    keyed = np.array([order[s] for s in cols["stage"]], float)
+    blocks = [np.array([[free[k]] for k in _KEYS], dtype=float)]
+    locs, ranks = [np.zeros(1)], [np.zeros(1, dtype=np.int8)]
+    for rank, (lc, st) in enumerate((mc, pin, dl)):
+        blocks.append(np.real(np.stack([st[k] for k in _KEYS])))
+        locs.append(np.asarray(lc, float))
+        ranks.append(np.full(locs[-1].size, rank, dtype=np.int8))
+    table = np.concatenate(blocks, axis=1)
+    locs, keyed = np.concatenate(locs), np.concatenate(ranks)
+    # history position: stage rank, then alpha ascending (pinning) or a descending (delamination);
+    # ``take`` lists the columns of ``table`` (the extrema appended after the rows) in that order
+    take = np.arange(locs.size)
+    extra_cols = []
     tp_pos = None
     for name, (stg, lc, state) in sorted(extra.items()):
-        rank = order[stg]
+        rank = STAGES.index(stg)
         sgn = -1.0 if stg == "delamination" else 1.0
-        pos_key = sgn * locs
         same = keyed == rank
         # first row of the stage that lies at or beyond the extremum
-        beyond = np.flatnonzero(same & (pos_key >= sgn * lc - 1e-15))
+        beyond = np.flatnonzero(same & (sgn * locs >= sgn * lc - 1e-15))
         j = int(beyond[0]) if beyond.size else int(np.flatnonzero(same)[-1]) + 1
         if not (j < locs.size and same[j] and abs(locs[j] - lc) <= 1e-14):
-            for k in _KEYS:
-                cols[k] = np.insert(cols[k], j, state[k])
-            cols["stage"] = np.insert(cols["stage"], j, stg)
-            locs, keyed = np.insert(locs, j, lc), np.insert(keyed, j, rank)
+            extra_cols.append([state[k] for k in _KEYS])
+            take = np.concatenate((take[:j], [table.shape[1] + len(extra_cols) - 1], take[j:]))
+            locs = np.concatenate((locs[:j], [lc], locs[j:]))
+            keyed = np.concatenate((keyed[:j], [rank], keyed[j:]))
             if tp_pos is not None and j <= tp_pos:
                 tp_pos += 1
         if name == "turning_point":
             tp_pos = j
+    if extra_cols:
+        table = np.concatenate((table, np.array(extra_cols).T), axis=1)
+    table = table[:, take] + 0.0  # + 0.0 turns -0.0 into 0.0
+    cols = dict(zip(_KEYS, table))
+    cols["stage"] = _STAGE_LABELS[keyed]
     n = locs.size
     if pc:
         cols["d"] = np.full(n, d_fix, dtype=float)  # exact by construction
@@ -456,7 +483,7 @@ def _assemble(free, mc, pin, dl, extra, pc, d_fix):
 def _point(state, pc, d_fix):
     p = state["p"]
     d = d_fix if pc else state["d"]
-    delta = float(apex_deflection(p)) - d if abs(p) <= 1 else None
+    delta = p / (1.0 + math.sqrt(1.0 - p * p)) - d if abs(p) <= 1 else None  # apex_deflection
     return {"f": state["f"], "delta": delta, "p": p, "a": state["a"]}
 
 
@@ -535,8 +562,7 @@ def _pinning_at_alpha(branch, alpha, ctx, pc, kappa, d_fix, kappa_m, onset, path
             if branch.slip == "frictionless":
                 frac = loc / _pin_end(branch.slip, ctx)
                 xg = np.array([ctx.a_m + (float(np.real(onset["a"][0])) - ctx.a_m) * frac])
-        x, k = _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)
-        return evaluate(branch, x, k, np.array([loc]), ctx)
+        return _solve_rows(branch, np.array([loc]), ctx, pc, kappa, d_fix, kg, xg)[2]
 
     if branch.slip == "frictionless":
         return at(alpha)

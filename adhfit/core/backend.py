@@ -22,8 +22,8 @@ from ..errors import ConvergenceError
 from . import branches, continuation
 from .branches import Branch, Context
 
-__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "follow", "extremum", "active", "use",
-           "ENV"]
+__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "solve_rows", "follow", "extremum",
+           "active", "use", "ENV"]
 
 #: environment variable that selects the backend
 ENV = "ADHFIT_BACKEND"
@@ -182,6 +182,43 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
     if xs.shape != shape:
         xs, ks = xs.reshape(shape), ks.reshape(shape)
     return (xs if implicit else None), ks
+
+
+def solve_rows(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, kappa0=None, x0=None):
+    """:func:`solve_state` and :func:`evaluate` at the solved states, in one compiled call.
+
+    Returns
+    -------
+    x, kappa, state : ndarray or None, ndarray, dict
+        ``state`` as :func:`evaluate` returns it (1-D rows, real).
+
+    Raises
+    ------
+    ConvergenceError
+        As :func:`solve_state`.
+    """
+    K = _compiled()
+    if K is None:
+        x, k = branches.solve_state(branch, loc, ctx, kappa=kappa, d_fix=d_fix, kappa0=kappa0, x0=x0)
+        return x, k, branches.evaluate(branch, x, k, loc, ctx)
+    loc = np.ascontiguousarray(loc, dtype=float)
+    shape = loc.shape
+    f64 = np.dtype(np.float64)
+    implicit = branch.target is not None
+    pressure = d_fix is not None
+    k = _flat(np.asarray(kappa0 if pressure else kappa, float), f64, shape)
+    lf = loc.ravel()
+    has_x0 = x0 is not None
+    xf = _flat(np.asarray(x0, float), f64, shape) if has_x0 else lf
+    c, w, a_m, L_m = _ctx(ctx)
+    xs, ks, status, out, ok = _paths().solve_observe_batch(
+        _code(branch), pressure, lf, k, xf, has_x0, c, w, a_m, L_m, float(d_fix) if pressure else 0.0)
+    if implicit or pressure:
+        if status.any():
+            _raise(branch, K, status, lf, k, ctx, pressure, d_fix)
+    res = _unflat(out, shape)
+    res["ok"] = ok.reshape(shape)
+    return (xs.reshape(shape) if implicit else None), ks.reshape(shape), res
 
 
 def derivative(branch: Branch, loc, ctx: Context, x, kappa, *, pressure_control: bool) -> dict:

@@ -251,3 +251,29 @@ def extremum_kernel(code, pressure, lo, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d
         return E_SOLVE, best, obs, False
     ok = _observe(code, x, k, best, c, w, a_m, obs)
     return E_OK, best, obs, ok
+
+
+@_jit
+def solve_observe_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
+    """compiled.solve_batch followed by compiled.evaluate_batch at the solved states (one call).
+
+    Returns
+    -------
+    x, kappa, status : as solve_batch
+    out, ok : as evaluate_batch (meaningless where status is not OK)
+    """
+    xs, ks, status = solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix)
+    n = loc.size
+    out = np.empty((7, n))
+    ok = np.zeros(n, dtype=np.bool_)
+    implicit = _implicit(code)
+    for i in range(n):
+        if status[i] != 0:
+            out[:, i] = math.nan
+            continue
+        a, alpha, d, f, G, j0, good = _state(code, xs[i] if implicit else loc[i], ks[i], loc[i],
+                                             c, w, a_m, True)
+        out[0, i], out[1, i], out[2, i], out[3, i] = a, alpha, ks[i] + 0.0 * f, d
+        out[4, i], out[5, i], out[6, i] = f, G, j0
+        ok[i] = good
+    return xs, ks, status, out, ok
