@@ -225,6 +225,12 @@ def _solve_rows(branch, locs, ctx, pc, kappa, d_fix, kappa_guess, x_guess=None, 
     return xs, ks, evaluate(branch, xs, ks, locs, ctx)
 
 
+def _check(state, what, info):
+    """check_ok, skipped where the compiled backend has already found every state admissible."""
+    if state.get("first_bad", 0) >= 0:
+        check_ok(state, what, info)
+
+
 def _detachment_end(ctx, kappa):
     """Where the history stops on the way to a -> 0: A_END a_max, or lower for very weak adhesion.
 
@@ -340,9 +346,10 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     mc = BRANCHES[("making_contact", slip)]
     a_mc = v["a_max"] * u_mc
     k_mc = _mc_pressure(a_mc, v, c) if pc else np.full(a_mc.shape, kappa_dc)
-    s_mc = evaluate(mc, None, k_mc, a_mc, Context(c, v["w"]))
-    check_ok({k: s_mc[k][-1:] for k in ("ok",) + _KEYS}, "end of loading", {"a_max": v["a_max"]})
-    check_ok(s_mc, "making contact", info)
+    s_mc = solve_rows(mc, a_mc, Context(c, v["w"]), kappa=k_mc)[2]
+    if s_mc.get("first_bad", 0) >= 0:
+        check_ok({k: s_mc[k][-1:] for k in ("ok",) + _KEYS}, "end of loading", {"a_max": v["a_max"]})
+        check_ok(s_mc, "making contact", info)
     ctx, kappa_m = Context(c, v["w"], v["a_max"], float(s_mc["J0"][-1])), float(k_mc[-1])
     p0 = float(critical_pressure(d_fix)) if pc else kappa_dc
     free = {"a": 0.0, "alpha": 0.0, "p": p0, "d": d_fix if pc else float(apex_deflection(p0)),
@@ -363,7 +370,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     x_guess = np.interp(lp, path[0], path[1])
     x_pin, k_pin, s_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
                                       start=(path[0][0], path[1][0], path[2][0]))
-    check_ok(s_pin, "pinning", info)
+    _check(s_pin, "pinning", info)
 
     # 4. delamination, a from a_on toward detachment (denser toward its end). No slip: the branch can
     # end at a finite radius, where the stretch-mismatch part of G, (t - 1)^2 / 2, alone reaches w
@@ -389,7 +396,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     x_dl, k_dl, s_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
                                    start=(a_on, None if dl.target is None else
                                           _delamination_start(slip, on_x, onset), k_on))
-    check_ok(s_dl, "delamination", info)
+    _check(s_dl, "delamination", info)
 
     stages = {"pinning": (pin, lp, s_pin, x_pin), "delamination": (dl, a_dl, s_dl, x_dl)}
     extra = _extrema(stages, ctx, pc, kappa_dc, d_fix, onset)
@@ -429,7 +436,7 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
                 np.real(st["p"][j0:j1])[order])
         lo, hi = (min(lo, hi), max(lo, hi)) if lo != hi else (locs[i], locs[i])
         loc, solved = extremum(branch, lo, hi, ctx, d_fix if pc else None, kappa, key, sign, rows)
-        check_ok(solved, name.replace("_", " "), {"stage": stage, branch.locator: float(loc)})
+        _check(solved, name.replace("_", " "), {"stage": stage, branch.locator: float(loc)})
         state = _real(solved, 0)
         out[name] = (stage, float(loc), state)
     return out
@@ -437,45 +444,44 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
 
 def _assemble(free, mc, pin, dl, extra, pc, d_fix):
     """Stack the stages in history order, insert the solved extrema, set ``delta`` and ``stable``."""
-    blocks = [np.array([[free[k]] for k in _KEYS], dtype=float)]
-    locs, ranks = [np.zeros(1)], [np.zeros(1, dtype=np.int8)]
-    for rank, (lc, st) in enumerate((mc, pin, dl)):
-        blocks.append(np.real(np.stack([st[k] for k in _KEYS])))
-        locs.append(np.asarray(lc, float))
-        ranks.append(np.full(locs[-1].size, rank, dtype=np.int8))
-    table = np.concatenate(blocks, axis=1)
-    locs, keyed = np.concatenate(locs), np.concatenate(ranks)
+    parts = ((np.zeros(1), {k: np.array([free[k]]) for k in _KEYS}),) + (mc, pin, dl)
+    locs = np.concatenate([lc for lc, _ in parts])
+    # rows per stage; the free-inflation row belongs to making contact
+    counts = [1 + mc[0].size, pin[0].size, dl[0].size]
     # history position: stage rank, then alpha ascending (pinning) or a descending (delamination);
-    # ``take`` lists the columns of ``table`` (the extrema appended after the rows) in that order
-    take = np.arange(locs.size)
-    extra_cols = []
+    # ``take`` lists the rows (the extrema appended after them) in that order
+    n0 = locs.size
+    take = np.arange(n0)
+    extra_rows = []
     tp_pos = None
     for name, (stg, lc, state) in sorted(extra.items()):
         rank = STAGES.index(stg)
-        sgn = -1.0 if stg == "delamination" else 1.0
-        same = keyed == rank
+        s0 = sum(counts[:rank])
+        seg = locs[s0:s0 + counts[rank]]
         # first row of the stage that lies at or beyond the extremum
-        beyond = np.flatnonzero(same & (sgn * locs >= sgn * lc - 1e-15))
-        j = int(beyond[0]) if beyond.size else int(np.flatnonzero(same)[-1]) + 1
-        if not (j < locs.size and same[j] and abs(locs[j] - lc) <= 1e-14):
-            extra_cols.append([state[k] for k in _KEYS])
-            take = np.concatenate((take[:j], [table.shape[1] + len(extra_cols) - 1], take[j:]))
+        beyond = np.flatnonzero(seg <= lc + 1e-15 if stg == "delamination" else seg >= lc - 1e-15)
+        j = s0 + (int(beyond[0]) if beyond.size else seg.size)
+        if not (beyond.size and abs(locs[j] - lc) <= 1e-14):
+            extra_rows.append(state)
+            take = np.concatenate((take[:j], [n0 + len(extra_rows) - 1], take[j:]))
             locs = np.concatenate((locs[:j], [lc], locs[j:]))
-            keyed = np.concatenate((keyed[:j], [rank], keyed[j:]))
+            counts[rank] += 1
             if tp_pos is not None and j <= tp_pos:
                 tp_pos += 1
         if name == "turning_point":
             tp_pos = j
-    if extra_cols:
-        table = np.concatenate((table, np.array(extra_cols).T), axis=1)
-    table = table[:, take] + 0.0  # + 0.0 turns -0.0 into 0.0
-    cols = dict(zip(_KEYS, table))
-    cols["stage"] = _STAGE_LABELS[keyed]
+    cols = {}
+    for k in _KEYS:
+        col = np.concatenate([st[k] for _, st in parts] + [[r[k] for r in extra_rows]])
+        cols[k] = np.real(col[take] if extra_rows else col) + 0.0  # + 0.0 turns -0.0 into 0.0
+    cols["stage"] = np.repeat(_STAGE_LABELS, counts)
     n = locs.size
     if pc:
         cols["d"] = np.full(n, d_fix, dtype=float)  # exact by construction
-    with np.errstate(invalid="ignore"):
-        cols["delta"] = apex_deflection(cols["p"]) - cols["d"]
+        with np.errstate(invalid="ignore"):
+            cols["delta"] = apex_deflection(cols["p"]) - cols["d"]
+    else:  # |p| < 1: apex_deflection without the error-state switch
+        cols["delta"] = cols["p"] / (1.0 + np.sqrt(1.0 - cols["p"] * cols["p"])) - cols["d"]
     cols["stable"] = np.arange(n) <= tp_pos
     return cols
 

@@ -34,6 +34,7 @@ _CODES = {("making_contact", "no-slip"): 0, ("making_contact", "frictionless"): 
           ("delamination", "no-slip"): 3, ("delamination", "frictionless"): 4}
 #: the resolved backend: the compiled module, or None for numpy; unresolved until first use
 _UNSET = object()
+_F64 = np.dtype(np.float64)
 _active = _UNSET
 
 
@@ -190,7 +191,9 @@ def solve_rows(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, kap
     Returns
     -------
     x, kappa, state : ndarray or None, ndarray, dict
-        ``state`` as :func:`evaluate` returns it (1-D rows, real).
+        ``state`` as :func:`evaluate` returns it (real), plus ``first_bad``: the index of the first
+        state outside the model or with a non-finite observable (-1 if none; what :func:`check_ok`
+        raises for). The numpy backend leaves ``first_bad`` out.
 
     Raises
     ------
@@ -203,21 +206,20 @@ def solve_rows(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, kap
         return x, k, branches.evaluate(branch, x, k, loc, ctx)
     loc = np.ascontiguousarray(loc, dtype=float)
     shape = loc.shape
-    f64 = np.dtype(np.float64)
     implicit = branch.target is not None
     pressure = d_fix is not None
-    k = _flat(np.asarray(kappa0 if pressure else kappa, float), f64, shape)
+    k = _flat(np.asarray(kappa0 if pressure else kappa, float), _F64, shape)
     lf = loc.ravel()
     has_x0 = x0 is not None
-    xf = _flat(np.asarray(x0, float), f64, shape) if has_x0 else lf
+    xf = _flat(np.asarray(x0, float), _F64, shape) if has_x0 else lf
     c, w, a_m, L_m = _ctx(ctx)
-    xs, ks, status, out, ok = _paths().solve_observe_batch(
+    xs, ks, status, out, ok, bad = _paths().solve_observe_batch(
         _code(branch), pressure, lf, k, xf, has_x0, c, w, a_m, L_m, float(d_fix) if pressure else 0.0)
-    if implicit or pressure:
-        if status.any():
-            _raise(branch, K, status, lf, k, ctx, pressure, d_fix)
+    if (implicit or pressure) and bad >= 0 and status.any():
+        _raise(branch, K, status, lf, k, ctx, pressure, d_fix)
     res = _unflat(out, shape)
     res["ok"] = ok.reshape(shape)
+    res["first_bad"] = int(bad)
     return (xs.reshape(shape) if implicit else None), ks.reshape(shape), res
 
 
@@ -299,7 +301,7 @@ def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: boo
     targets = np.atleast_1d(np.asarray(targets, float))
     c, w, a_m, L_m = _ctx(ctx)
     pressure = d_fix is not None
-    status, n_out, ox, ok_, pl, px, pk = P.follow_kernel(
+    status, n_out, ox, ok_, pl, px, pk, _ = P.follow_kernel(
         _code(branch), pressure, float(l0), targets, math.nan if x0 is None else float(x0),
         float(k0), c, w, a_m, L_m, float(d_fix) if pressure else 0.0, bool(log), int(max_steps),
         bool(allow_end))
@@ -342,4 +344,5 @@ def extremum(branch: Branch, lo: float, hi: float, ctx: Context, d_fix, kappa, k
                                {"lo": float(lo), "hi": float(hi), branch.locator: float(loc)})
     state = {k: obs[i:i + 1] for i, k in enumerate(_KEYS)}
     state["ok"] = np.array([bool(ok)])
+    state["first_bad"] = 0 if not (ok and all(math.isfinite(v) for v in obs[:6])) else -1
     return float(loc), state

@@ -67,6 +67,8 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
     out_x, out_k : ndarray
     path_l, path_x, path_k : ndarray
         Every accepted step (locators, x, kappa); x NaN on explicit branches.
+    last : ndarray, shape (7,)
+        Observables a, alpha, p, d, f, G, J0 of the last accepted step (NaN if none).
     """
     implicit = _implicit(code)
     n_t = targets.size
@@ -84,6 +86,7 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
     h = span / 16.0
     i, steps, n_out, status = 0, 0, 0, F_OK
     obs = np.empty(7)
+    last_obs = np.full(7, math.nan)
     while i < n_t:
         steps += 1
         if steps > max_steps:
@@ -110,6 +113,7 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
                 break
             continue
         ss[m], xs[m], ks[m] = s_new, (x if implicit else math.nan), k
+        last_obs[:] = obs
         m += 1
         if s_new == goal:
             out_x[n_out], out_k[n_out] = xs[m - 1], ks[m - 1]
@@ -119,7 +123,7 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
     path_l = np.empty(m)
     for j in range(m):
         path_l[j] = math.exp(ss[j]) if log else ss[j]
-    return status, n_out, out_x, out_k, path_l, xs[:m].copy(), ks[:m].copy()
+    return status, n_out, out_x, out_k, path_l, xs[:m].copy(), ks[:m].copy(), last_obs
 
 
 @_jit
@@ -261,19 +265,22 @@ def solve_observe_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, 
     -------
     x, kappa, status : as solve_batch
     out, ok : as evaluate_batch (meaningless where status is not OK)
+    bad : int
+        First row outside the model or with a non-finite a, alpha, p, d, f, G (compiled.first_bad);
+        -1 if none.
     """
     xs, ks, status = solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix)
     n = loc.size
     out = np.empty((7, n))
     ok = np.zeros(n, dtype=np.bool_)
     implicit = _implicit(code)
+    bad = -1
     for i in range(n):
         if status[i] != 0:
             out[:, i] = math.nan
+            bad = i if bad < 0 else bad
             continue
-        a, alpha, d, f, G, j0, good = _state(code, xs[i] if implicit else loc[i], ks[i], loc[i],
-                                             c, w, a_m, True)
-        out[0, i], out[1, i], out[2, i], out[3, i] = a, alpha, ks[i] + 0.0 * f, d
-        out[4, i], out[5, i], out[6, i] = f, G, j0
-        ok[i] = good
-    return xs, ks, status, out, ok
+        ok[i] = _observe(code, xs[i] if implicit else loc[i], ks[i], loc[i], c, w, a_m, out[:, i])
+        if bad < 0 and not _admissible(ok[i], out[:, i]):
+            bad = i
+    return xs, ks, status, out, ok, bad
