@@ -1,0 +1,277 @@
+"""``adhfit fit --method mcmc``: Bayesian fit of both slip conditions, and their model probabilities.
+
+1. Least squares first (:func:`.lsq.fit_slip`, the same residual and model): the optimum and its
+   covariance start the walkers and the first proposal; ΔBIC is reported next to the evidence.
+2. Each slip condition's posterior (:mod:`.posterior`: Gaussian likelihood, σ known or integrated
+   out; log-uniform priors by default) is sampled by :func:`.mcmc.sample_posterior` (4 independent
+   ensembles, run length from the autocorrelation time, chain saved to ``OUTDIR/chain.h5``).
+3. Each evidence is estimated by importance sampling from a Student-t fitted to the posterior
+   samples (:mod:`.evidence`); the posterior model probabilities (equal prior odds) decide the slip
+   condition only when decisive (≥ 0.95, conservatively); otherwise ``selected`` is null and the
+   reported estimates average the two posteriors with their probabilities as weights.
+4. Estimates: posterior median (``value``), posterior sd (``stderr``), 2.5/97.5 percentiles
+   (``ci95``); diagnostics (:mod:`.diagnostics`) and plain warnings.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from .diagnostics import diagnose
+from .evidence import StudentT, importance_evidence, model_probabilities
+from .fit import _check_options, _inputs, _provenance
+from .lsq import fit_slip
+from .mcmc import ParallelMap, default_workers, sample_posterior
+from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
+from .posterior import Target, default_priors
+from .result import Estimate, FitResult, clean
+from .selection import compare
+from .summary import summarize
+
+__all__ = ["McmcFitResult", "fit_curve_mcmc", "DEFAULTS"]
+
+#: default run settings (budget: a 300-row curve, both slips, ~60 s on 2 cores at ~7 ms an evaluation)
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "check_every": 10, "max_steps": 300,
+            "evidence_draws": 400, "predictive_draws": 60}
+CI_METHOD = "posterior 2.5/97.5 percentiles"
+
+
+@dataclass(frozen=True)
+class McmcFitResult(FitResult):
+    """A :class:`FitResult` with the MCMC run's summary (``mcmc``), samples and predictive band.
+
+    Attributes
+    ----------
+    mcmc : mapping
+        JSON-ready: seed, noise model, priors, per slip condition its diagnostics and evidence, the
+        model probabilities, cost.
+    samples : mapping slip -> ndarray (n, k)
+        Kept posterior samples in SI, columns ``mcmc["parameters"][slip]``.
+    predictive : mapping
+        Posterior-predictive band at the data rows of the reported fit (``slip``, ``median``,
+        ``lo``/``hi`` (model curve, 95 %), ``lo_obs``/``hi_obs`` (with the noise)).
+    """
+
+    mcmc: Mapping[str, Any] = field(default_factory=dict)
+    samples: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    predictive: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.mcmc.get("converged"))
+
+    def as_dict(self) -> dict:
+        d = super().as_dict()
+        d.update(clean({"seed": self.mcmc.get("seed"), "converged": self.converged,
+                        "model_probabilities": self.mcmc.get("model_probabilities", {}).get("probabilities"),
+                        "diagnostics": {s: v["diagnostics"] for s, v in self.mcmc.get("slips", {}).items()},
+                        "mcmc": dict(self.mcmc)}))
+        return d
+
+
+def _estimates(samples: np.ndarray, names: list[str], lsq: Mapping[str, Estimate]) -> dict[str, Estimate]:
+    out = {}
+    for k, name in enumerate(names):
+        col = samples[:, k]
+        lo, med, hi = np.percentile(col, [2.5, 50.0, 97.5])
+        out[name] = Estimate(name, float(med), float(np.std(col, ddof=1)), (float(lo), float(hi)), CI_METHOD,
+                             lsq[name].ci95 if name in lsq else None)
+    return out
+
+
+def _mixture(samples: dict[str, np.ndarray], probs: dict[str, float], rng: np.random.Generator) -> np.ndarray:
+    """Samples of the model-averaged posterior: each slip's samples resampled in proportion to P(slip)."""
+    n = min(len(s) for s in samples.values())
+    parts = [s[rng.choice(len(s), int(round(n * probs[k])), replace=True)] for k, s in samples.items()]
+    return np.concatenate([p for p in parts if len(p)])
+
+
+class _Predict:
+    """θ -> predicted force at every row (a picklable job for the worker map)."""
+
+    def __init__(self, target: Target) -> None:
+        self.target = target
+
+    def __call__(self, theta):
+        si = self.target.par.si(dict(zip(self.target.internal, map(float, theta))))
+        try:
+            return self.target.model.predict(si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"])
+        except ModelDomainError:
+            return np.full(self.target.model.force.shape, np.nan)
+
+
+def _band(pmap: ParallelMap, target: Target, flat: np.ndarray, sigma: float, n: int,
+          rng: np.random.Generator) -> dict:
+    pick = flat[rng.choice(len(flat), min(n, len(flat)), replace=False)]
+    preds = np.array(pmap.map(pmap.register(_Predict(target)), list(pick)))
+    preds = preds[np.all(np.isfinite(preds), axis=1)]
+    obs = preds + rng.normal(0.0, sigma, preds.shape)
+    lo, med, hi = np.percentile(preds, [2.5, 50, 97.5], axis=0)
+    lo_o, hi_o = np.percentile(obs, [2.5, 97.5], axis=0)
+    return {"median": med, "lo": lo, "hi": hi, "lo_obs": lo_o, "hi_obs": hi_o, "draws": int(len(preds))}
+
+
+def _verdict(probs: dict, lsq_verdict: dict) -> dict:
+    sel = probs["selected"]
+    if len(probs["probabilities"]) == 1:
+        verdict = lsq_verdict["verdict"]
+    else:
+        verdict = f"{sel} favoured" if sel else "the data cannot tell them apart"
+    return {"selected": sel, "verdict": verdict, "evidence": "posterior model probability",
+            "favoured": probs["favoured"], "probabilities": probs["probabilities"],
+            "probability_lower": probs["probability_lower"], "threshold": probs["threshold"],
+            "log_bayes_factor": probs["log_bayes_factor"], "log_bayes_factor_stderr": probs["log_bayes_factor_stderr"],
+            "method": probs["method"] + "; equal prior model probabilities",
+            "explanation": probs["explanation"] + (f" Least squares: ΔBIC = {lsq_verdict['delta_bic']:.1f} "
+                                                   f"({lsq_verdict['verdict']})." if lsq_verdict.get("delta_bic")
+                                                   is not None else ""),
+            "delta_aic": lsq_verdict["delta_aic"], "delta_bic": lsq_verdict["delta_bic"],
+            "lsq_verdict": lsq_verdict["verdict"], "lsq_selected": lsq_verdict["selected"],
+            "parameters_from": sel or probs["favoured"],
+            "thresholds": {"probability": probs["threshold"], "criterion": "posterior model probability, "
+                           "with ln B lowered by 2 Monte-Carlo standard errors"}}
+
+
+def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
+                   fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
+                   points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
+                   progress: bool | None = None, **settings) -> McmcFitResult:
+    """Bayesian fit of W_ad, μh (and offsets) under each slip condition, and the slip condition's probability.
+
+    Parameters
+    ----------
+    data, scene, slip, sigma, fit_x_offset, fit_force_offset, points
+        As for :func:`adhfit.fitting.fit.fit_curve`.  ``sigma`` given: known noise; else integrated out.
+    seed : int, optional
+        Root seed of every random number (walker starts, emcee, evidence draws, band); drawn from
+        fresh entropy and recorded when not given.
+    outdir : path, optional
+        Where ``chain.h5`` is written (one group per slip condition; not written when None).
+    workers : int, optional
+        Processes for likelihood evaluations (default: up to 2).  Results do not depend on it.
+    progress : bool, optional
+        tqdm bar on standard error (default: only on a terminal).
+    **settings
+        Override :data:`DEFAULTS` (``n_walkers``, ``n_ensembles``, ``tune_steps``, ``check_every``,
+        ``max_steps``, ``evidence_draws``, ``predictive_draws``).
+
+    Returns
+    -------
+    McmcFitResult
+    """
+    t0 = time.perf_counter()
+    unknown = set(settings) - set(DEFAULTS)
+    if unknown:
+        from ..errors import InputError  # noqa: PLC0415
+        raise InputError(sorted(unknown)[0], settings[sorted(unknown)[0]], "one of " + ", ".join(DEFAULTS))
+    cfg = DEFAULTS | settings
+    curve, scene = _inputs(data, scene)
+    slip = scene.slip if slip is None else slip
+    _check_options("lsq", slip, sigma, points)
+    seed = int(np.random.SeedSequence().entropy % 2**63) if seed is None else int(seed)
+    root = np.random.SeedSequence(seed)
+    slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
+    seg = segment(curve)
+    raws = {}
+    for s in slips:
+        model = CurveModel(curve, scene, s, points=points, segments=seg)
+        raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
+                           extra_starts=[r.par.si(r.best.params) for r in raws.values()])
+    lsq_fits = {s: summarize(r, profile=False) for s, r in raws.items()}
+    lsq_verdict = compare({s: f.bic for s, f in lsq_fits.items()}, {s: f.aic for s, f in lsq_fits.items()})
+    t_lsq = time.perf_counter() - t0
+    lsq_values = [r.par.si(r.best.params) for r in raws.values()]
+    targets = {s: Target(r.model, r.par, default_priors(r.par, lsq_values, scene.priors), sigma)
+               for s, r in raws.items()}
+    path = None
+    if outdir is not None:
+        from pathlib import Path  # noqa: PLC0415
+        path = Path(outdir) / "chain.h5"
+        path.parent.mkdir(parents=True, exist_ok=True)
+    seeds = dict(zip(slips, root.spawn(len(slips))))
+    chains, evid, diags, samples = {}, {}, {}, {}
+    with ParallelMap(default_workers() if workers is None else workers) as pmap:
+        for s, tg in targets.items():
+            raw = raws[s]
+            theta0 = tg.from_si(raw.par.si(raw.best.params))
+            cov0 = raw.best.covar if raw.best.covar is not None else np.diag((0.05 * np.ones(tg.ndim)) ** 2)
+            ss_run, ss_ev = seeds[s].spawn(2)
+            chains[s] = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
+                                         n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
+                                         tune_steps=cfg["tune_steps"], check_every=cfg["check_every"],
+                                         max_steps=cfg["max_steps"], path=path, group=s, pmap=pmap,
+                                         progress=progress)
+            diags[s] = diagnose(chains[s], tg.names)
+            flat = chains[s].flat
+            samples[s] = tg.to_si(flat)
+            ll = pmap.register(tg.log_likelihood)
+            evid[s] = importance_evidence(tg.log_prior, lambda th, ll=ll: np.array(pmap.map(ll, list(th))),
+                                          StudentT.fit(flat, df=5.0, inflate=1.2), cfg["evidence_draws"],
+                                          np.random.default_rng(ss_ev))
+        probs = model_probabilities(evid)
+        verdict = _verdict(probs, lsq_verdict)
+        rng = np.random.default_rng(root.spawn(len(slips) + 1)[-1])
+        rep = verdict["parameters_from"]
+        fits = {s: dataclasses.replace(lsq_fits[s], parameters=_estimates(samples[s], targets[s].names,
+                                                                          lsq_fits[s].parameters),
+                                       warnings=tuple(lsq_fits[s].warnings) + tuple(diags[s]["warnings"]),
+                                       raw=chains[s]) for s in slips}
+        if verdict["selected"] is None and len(slips) > 1:
+            mixed = _mixture(samples, probs["probabilities"], rng)
+            reported = {k: dataclasses.replace(e, ci_method=CI_METHOD + ", averaged over both slip conditions "
+                                                "(weights = model probabilities)")
+                        for k, e in _estimates(mixed, targets[rep].names, {}).items()}
+        else:
+            reported = dict(fits[rep].parameters)
+        band = _band(pmap, targets[rep], chains[rep].flat, lsq_fits[rep].sigma, cfg["predictive_draws"], rng)
+        n_evals = pmap.n_evaluations
+    band["slip"] = rep
+    wall = time.perf_counter() - t0
+    converged = all(d["converged"] for d in diags.values())
+    warn = list(scene.warnings())
+    if not converged:
+        warn.append("MCMC NOT CONVERGED for: " + ", ".join(s for s, d in diags.items() if not d["converged"])
+                    + " — do not trust these intervals (see the diagnostics)")
+    for s in slips:
+        warn += [f"[{s}] {w}" for w in fits[s].warnings]
+    if not probs["reliable"]:
+        warn.append("the evidence estimate is unreliable (few effective importance weights)")
+    if verdict["selected"] is None and len(slips) > 1:
+        warn.append(f"slip condition undecided ({verdict['explanation']}); the estimates average both "
+                    f"conditions' posteriors, weighted by their probabilities")
+    mc_time = sum(c.wall_time for c in chains.values())
+    mc_evals = sum(c.n_evaluations for c in chains.values())
+    summary = {
+        "seed": seed, "noise_model": targets[rep].noise_model, "converged": converged,
+        "priors": {k: p.as_dict() for k, p in zip(targets[rep].names, targets[rep].priors)},
+        "settings": cfg | {"workers": default_workers() if workers is None else workers},
+        "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a tuned Student-t "
+                   "(90 %) + differential evolution (10 %); see adhfit.fitting.mcmc",
+        "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap",
+        "model_probabilities": probs,
+        "slips": {s: {"parameters": targets[s].names, "diagnostics": diags[s], "evidence": evid[s].as_dict(),
+                      "ensemble_seeds": chains[s].seeds, "chain_groups": chains[s].groups,
+                      "mcmc_seconds": chains[s].wall_time, "posterior_evaluations": chains[s].n_evaluations}
+                  for s in slips},
+        "chain_file": str(path) if path is not None and any(c.groups for c in chains.values()) else None,
+        "lsq_seconds": t_lsq, "model_evaluations": n_evals,
+        "evaluations_per_second": mc_evals / mc_time if mc_time > 0 else None,
+    }
+    options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
+               "fit_force_offset": fit_force_offset, "points": points} | cfg
+    rep_fit = fits[rep]
+    return McmcFitResult(
+        method="mcmc", slip=verdict, parameters=reported, fits=fits, n_points=len(curve.x),
+        n_excluded=len(curve.excluded), sigma=rep_fit.sigma,
+        sigma_source="given" if sigma is not None else "integrated out (prior ∝ 1/σ); the value shown is the "
+                                                       "least-squares estimate",
+        warnings=tuple(warn), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
+        n_histories=sum(f.n_histories for f in lsq_fits.values()), wall_time=wall,
+        provenance=_provenance(curve, scene, seed, "mcmc", options), segments=seg.as_dict(),
+        excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), mcmc=summary,
+        samples=samples, predictive=band)
