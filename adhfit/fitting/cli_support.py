@@ -93,7 +93,8 @@ def run_fit(args) -> int:
     if args.scene is None:
         args.scene = batch.single_scene(args.data)
     if args.method == "mcmc":
-        raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
+        from .mcmc_cli import run_fit_mcmc  # noqa: PLC0415
+        return run_fit_mcmc(args)
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     scene = load_scene(args.scene)
     curve = read_curve(args.data, scene.control)

@@ -36,8 +36,9 @@ from .summary import summarize
 __all__ = ["McmcFitResult", "fit_curve_mcmc", "DEFAULTS"]
 
 #: default run settings (budget: a 300-row curve, both slips, ~60 s on 2 cores at ~7 ms an evaluation)
-DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "check_every": 10, "max_steps": 300,
-            "evidence_draws": 400, "predictive_draws": 60}
+#: check_every = 5 steps is ~3 τ here, as emcee's own example checks every ~2.5 τ (100 steps, τ ≈ 40)
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "check_every": 5, "max_steps": 300,
+            "evidence_draws": 300, "predictive_draws": 60}
 CI_METHOD = "posterior 2.5/97.5 percentiles"
 
 
@@ -259,6 +260,7 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
                       "mcmc_seconds": chains[s].wall_time, "posterior_evaluations": chains[s].n_evaluations}
                   for s in slips},
         "chain_file": str(path) if path is not None and any(c.groups for c in chains.values()) else None,
+        "lsq_estimates": {s: {k: e.value for k, e in lsq_fits[s].parameters.items()} for s in slips},
         "lsq_seconds": t_lsq, "model_evaluations": n_evals,
         "evaluations_per_second": mc_evals / mc_time if mc_time > 0 else None,
     }

@@ -82,6 +82,9 @@ def render_markdown(result) -> str:
            f"Input `{prov.get('input')}` (sha256 `{prov.get('input_sha256', '')[:16]}…`), scene "
            f"`{prov.get('scene_file')}`, method {result.method}, adhfit {prov.get('adhfit_version')}, "
            f"seed {prov.get('seed')}.", ""]
+    if result.method == "mcmc":
+        from .mcmc_markdown import mcmc_sections  # noqa: PLC0415
+        out += mcmc_sections(result)
     out += _estimates(result) + [""] + _slip(result) + ["", "## Warnings", ""]
     out += [f"- ⚠ {w}" for w in result.warnings] or ["- none"]
     out += [""] + _treatment(result)
