@@ -240,6 +240,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
                     + " — do not trust these intervals (see the diagnostics)")
     for s in slips:
         warn += [f"[{s}] {w}" for w in fits[s].warnings]
+    if path is not None and not any(c.groups for c in chains.values()):
+        warn.append("the chains were not saved (emcee's HDF5 backend needs h5py, which is not installed)")
     if not probs["reliable"]:
         warn.append("the evidence estimate is unreliable (few effective importance weights)")
     if verdict["selected"] is None and len(slips) > 1:
