@@ -341,7 +341,8 @@ def ns_del_t(a: float, kappa: float, rs: float, w: float, big_l: float, t0: floa
         dd = noslip_d(a, alpha, c2, kappa, rs)
         return material_coordinate(a, kappa, c2, dd, tol, _ns_turned(a, alpha, rs)) - big_l
 
-    return solve(res, t0, 1e-9, 1.0 + math.sqrt(2.0 * w), 0.01, tol, "no-slip delamination t")
+    step = min(0.01, 0.05 * math.sqrt(2.0 * w))   # the admissible t-interval is 2 sqrt(2w) wide
+    return solve(res, t0, 1e-9, 1.0 + math.sqrt(2.0 * w), step, tol, "no-slip delamination t")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -10,7 +10,7 @@ cross constraints) with an explicitly seeded ``numpy.random.Generator``, runs ea
 ``nan_in_output``: a NaN/inf in the frame (``delta`` may be empty only where |p| > 1, A2) or in the
 summary.  ``invariant_violation``: finite output that breaks a contract every history must meet (stage
 order, 0 <= G <= w, ``stable`` true then false, ``f_max`` = force at the end of loading, ``f_min`` <=
-every row's f).  A hung scene is killed and counted as ``timeout``, not fatal.
+every pinning/delamination row's f, last row near detachment: a <= 1e-2 a_max).  A hung scene is killed and counted as ``timeout``, not fatal.
 
 Usage::
 
@@ -161,9 +161,15 @@ def _invariants(frame, summary: dict, w: float) -> list[str]:
     fmax = summary.get("f_max")
     if mk.size and isinstance(fmax, float) and abs(fmax - f[mk[-1]]) > 1e-9 * max(1.0, abs(fmax)):
         bad.append(f"f_max {fmax!r} != f at end of loading {f[mk[-1]]!r}")
+    back = f[frame["stage"].to_numpy() != "making_contact"]
     fmin = (summary.get("f_min") or {}).get("f")
-    if isinstance(fmin, float) and fmin > f.min() + 1e-9 * max(1.0, abs(fmin)):
-        bad.append(f"f_min {fmin!r} above the least row force {f.min()!r}")
+    if isinstance(fmin, float) and back.size and fmin > back.min() + 1e-9 * max(1.0, abs(fmin)):
+        bad.append(f"f_min {fmin!r} above the least pinning/delamination row force {back.min()!r}")
+    a = frame["a"].to_numpy(dtype=float)
+    a_max = a[mk[-1]] if mk.size else a.max()
+    if a[-1] > 1e-2 * a_max:
+        bad.append(f"history stops at a = {a[-1]:.6g} ({a[-1] / a_max:.3g} a_max) with f = {f[-1]:.6g}, "
+                   "not near detachment (A2: run on toward a <= 1e-3 a_max)")
     return bad
 
 
