@@ -18,7 +18,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .core import delamination
-from .core.backend import check_ok, evaluate, extremum, follow, solve_rows, solve_state
+from .core.backend import (check_ok, evaluate, extremum, follow, mc_pressure, solve_rows,
+                           solve_state)
 from .core.branches import BRANCHES, Context
 from .core.inflation import apex_deflection, critical_pressure
 from .core.solve import newton
@@ -133,14 +134,8 @@ def _mc_pressure(a, v, c):
     d_fix = v["d"]
     lo = np.full(a.shape, float(critical_pressure(d_fix)))
     hi = (1.0 + c * a * a) / (1.0 - a * a) * (1 - 1e-12)
-    mc = BRANCHES[("making_contact", "no-slip")]
-    ctx = Context(c, v["w"])
     try:
-        def gap(k):
-            e = evaluate(mc, None, k, a, ctx)
-            return np.where(e["ok"], e["d"] - d_fix, np.nan)
-        return newton(gap, 0.5 * (lo + hi), lo, hi,
-                      what="making contact: pressure from the fixed gap", inputs={"d": d_fix})
+        return mc_pressure(a, Context(c, v["w"]), d_fix, lo, hi)
     except ConvergenceError as err:
         raise InputError("a_max", v["a_max"], "reachable under pressure control at this gap",
                          "The membrane cannot reach this contact radius with a Case I shape "

@@ -22,8 +22,8 @@ from ..errors import ConvergenceError
 from . import branches, continuation
 from .branches import Branch, Context
 
-__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "solve_rows", "follow", "extremum",
-           "active", "use", "ENV"]
+__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "solve_rows", "mc_pressure", "follow",
+           "extremum", "active", "use", "ENV"]
 
 #: environment variable that selects the backend
 ENV = "ADHFIT_BACKEND"
@@ -223,6 +223,30 @@ def solve_rows(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, kap
     return (xs.reshape(shape) if implicit else None), ks.reshape(shape), res
 
 
+def mc_pressure(a, ctx: Context, d_fix: float, lo, hi):
+    """Pressure control, making contact: kappa with the gap d_fix (see :func:`.branches.mc_pressure`).
+
+    Raises
+    ------
+    ConvergenceError
+        When a row has no sign change on its bracket or does not converge.
+    """
+    K = _compiled()
+    if K is None:
+        return branches.mc_pressure(a, ctx, d_fix, lo, hi)
+    a = np.ascontiguousarray(a, dtype=float)
+    lo = np.ascontiguousarray(np.broadcast_to(lo, a.shape), dtype=float).ravel()
+    hi = np.ascontiguousarray(np.broadcast_to(hi, a.shape), dtype=float).ravel()
+    ks, status = K.mc_pressure_batch(a.ravel(), float(ctx.c), float(d_fix), lo, hi)
+    if status.any():
+        i = int(np.flatnonzero(status)[0])
+        what = ("no sign change on the bracket" if status[i] == K.FAIL_BRACKET else
+                "the bracket closed on a point outside the domain")
+        raise ConvergenceError(f"making contact: pressure from the fixed gap: {what}",
+                               {"d": d_fix, "index": i, "lo": lo[i], "hi": hi[i]})
+    return ks.reshape(a.shape)
+
+
 def derivative(branch: Branch, loc, ctx: Context, x, kappa, *, pressure_control: bool) -> dict:
     """d(observable)/d(locator) along the branch at solved states (see :func:`.branches.derivative`).
 
@@ -271,17 +295,11 @@ def check_ok(state: dict, what: str, inputs: dict) -> None:
 
 
 # ----------------------------------------------------------------------------------------------
-# continuation and extrema (continuation.py / compiled_paths.py)
-
-_PATHS = None
-
+# continuation and extrema (continuation.py / compiled.py)
 
 def _paths():
-    global _PATHS
-    if _PATHS is None:
-        from . import compiled_paths
-        _PATHS = compiled_paths
-    return _PATHS
+    """The compiled kernels (called only when the numba backend is active)."""
+    return _compiled()
 
 
 def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: bool,

@@ -166,14 +166,37 @@ def solve_unknown(branch: Branch, kappa, loc, ctx: Context, x0=None, on_fail: st
     def resid(x):
         return _residual(branch, x, kappa, loc, ctx)
 
-    if x0 is not None and np.all(np.isfinite(x0)):
-        # from a continuation predictor: the nearby root, even where a second root has entered the
-        # bracket and removed its sign change; the bracket is the fallback
-        x = newton(resid, x0, on_fail="nan", what=what, inputs=inputs)
-        inside = np.isfinite(x) & (x >= np.minimum(lo, hi)) & (x <= np.maximum(lo, hi))
-        if np.all(inside):
-            return x
-    return newton(resid, 0.5 * (lo + hi), lo, hi, on_fail=on_fail, what=what, inputs=inputs)
+    if x0 is None:
+        return newton(resid, 0.5 * (lo + hi), lo, hi, on_fail=on_fail, what=what, inputs=inputs)
+    # from a continuation predictor: the nearby root, even where a second root has entered the
+    # bracket and removed its sign change; the bracket is the fallback, row by row (rows are
+    # independent problems)
+    x0 = np.broadcast_to(np.asarray(x0, float), loc.shape)
+    start = np.isfinite(x0)
+    x = np.full(loc.shape, np.nan)
+    if np.any(start):
+        x = newton(resid, np.where(start, x0, 0.5 * (lo + hi)), on_fail="nan", what=what,
+                   inputs=inputs)
+    inside = start & np.isfinite(x) & (x >= np.minimum(lo, hi)) & (x <= np.maximum(lo, hi))
+    if np.all(inside):
+        return x
+    rest = np.flatnonzero(~inside.ravel())
+
+    def resid_rest(z):
+        return _residual(branch, z, kappa.ravel()[rest], loc.ravel()[rest], ctx)
+
+    lo_r, hi_r = lo.ravel()[rest], hi.ravel()[rest]
+    try:
+        xr = newton(resid_rest, 0.5 * (lo_r + hi_r), lo_r, hi_r, on_fail=on_fail, what=what,
+                    inputs=inputs)
+    except ConvergenceError as err:  # name the row of the whole array
+        if "index" not in err.inputs:
+            raise
+        raise ConvergenceError(err.what, {**err.inputs, "index": int(rest[err.inputs["index"]])}) \
+            from None
+    x = x.ravel().copy()
+    x[rest] = xr
+    return x.reshape(loc.shape)
 
 
 def _propagate(branch, x, kappa_r, kappa_c, loc_c, ctx):
@@ -203,10 +226,11 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
 
     def gap(kc):
         kr = np.real(kc)
-        # a kappa iterate with no inner solution gives NaN, so the outer Newton backs off
+        # a kappa iterate with no inner solution gives NaN, so the outer Newton backs off; each row
+        # restarts from its own last finite inner solution
         x = solve_unknown(branch, kr, loc, ctx, memo.get("x"), on_fail="nan")
-        if x is not None and np.all(np.isfinite(x)):
-            memo["x"] = x
+        if x is not None:
+            memo["x"] = x if memo["x"] is None else np.where(np.isfinite(x), x, memo["x"])
         xc = _propagate(branch, x, kr, kc, loc + 0j, ctx)
         e = evaluate(branch, xc, kc, loc, ctx)
         return np.where(e["ok"], e["d"] - d_fix, np.nan)
@@ -252,6 +276,21 @@ def derivative(branch: Branch, loc, ctx: Context, x, kappa, *, pressure_control:
     dk = -(Rx * Gl - Rl * Gx) / det
     out = evaluate(branch, x + 1j * STEP * dx, kr + 1j * STEP * dk, lc, ctx)
     return {k: np.imag(v) / STEP for k, v in out.items() if k != "ok"}
+
+
+def mc_pressure(a, ctx: Context, d_fix: float, lo, hi):
+    """Pressure control, making contact: kappa with d(kappa, a) = d_fix on the bracket [lo, hi].
+
+    Bracketed Newton (:func:`~.solve.newton`) on the gap; d grows with kappa along the bracket.
+    """
+    mc = BRANCHES[("making_contact", "no-slip")]
+
+    def gap(k):
+        e = evaluate(mc, None, k, a, ctx)
+        return np.where(e["ok"], e["d"] - d_fix, np.nan)
+
+    return newton(gap, 0.5 * (lo + hi), lo, hi, what="making contact: pressure from the fixed gap",
+                  inputs={"d": d_fix})
 
 
 def check_ok(state: dict, what: str, inputs: dict) -> None:

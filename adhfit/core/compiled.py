@@ -27,7 +27,8 @@ from numba import njit
 
 __all__ = ["MC", "PIN_NS", "PIN_FR", "DEL_NS", "DEL_FR", "OK", "FAIL_BRACKET", "FAIL_INNER",
            "FAIL_OUTER", "carlson_rf", "carlson_rd", "evaluate_batch", "solve_batch",
-           "derivative_batch", "first_bad"]
+           "derivative_batch", "first_bad", "solve_observe_batch", "follow_kernel", "extremum_kernel",
+           "F_OK", "F_STALLED", "F_STEPS", "E_OK", "E_SEARCH", "E_SOLVE", "E_NOCONV", "KEY_CODES"]
 
 MC, PIN_NS, PIN_FR, DEL_NS, DEL_FR = 0, 1, 2, 3, 4
 OK, FAIL_BRACKET, FAIL_INNER, FAIL_OUTER = 0, 1, 2, 3
@@ -363,37 +364,30 @@ def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
 
 
 @_jit
+def _inner_one(code, kappa, loc, c, w, a_m, L_m, x0, has_x0):
+    """branches.solve_unknown for one row: (x, status).
+
+    From a finite start value the row is first solved by unbracketed Newton (the root near a
+    continuation predictor); if that fails or leaves the bracket, the row is solved again, bracketed,
+    from the middle of its bracket.
+    """
+    lo, hi = _bracket(code, loc, c, w, a_m)
+    if has_x0 and math.isfinite(x0):
+        x, st = _newton_free(code, kappa, loc, c, w, a_m, L_m, x0)
+        if math.isfinite(x) and min(lo, hi) <= x <= max(lo, hi):
+            return x, OK
+    x, st, _, _ = _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, 0.5 * (lo + hi), lo, hi)
+    return x, st
+
+
+@_jit
 def _inner_rows(code, kappa, loc, c, w, a_m, L_m, x0, has_x0, xs, status):
     """branches.solve_unknown over all rows, into ``xs`` and ``status`` (NaN and a code on failure).
 
-    From finite start values every row is first solved by unbracketed Newton (the root near a
-    continuation predictor); only if every row then lies inside its bracket is that the answer,
-    otherwise every row is solved again, bracketed, from the middle of its bracket.
+    Rows are independent (:func:`_inner_one` each).
     """
-    n = loc.size
-    if has_x0:
-        for i in range(n):
-            if not math.isfinite(x0[i]):
-                has_x0 = False
-                break
-    if has_x0:
-        inside = True
-        for i in range(n):
-            x, st = _newton_free(code, kappa[i], loc[i], c, w, a_m, L_m, x0[i])
-            lo, hi = _bracket(code, loc[i], c, w, a_m)
-            if not (math.isfinite(x) and min(lo, hi) <= x <= max(lo, hi)):
-                inside = False
-                break
-            xs[i] = x
-            status[i] = OK
-        if inside:
-            return
-    for i in range(n):
-        lo, hi = _bracket(code, loc[i], c, w, a_m)
-        x, st, _, _ = _newton_bracketed(code, kappa[i], loc[i], c, w, a_m, L_m, 0.5 * (lo + hi),
-                                        lo, hi)
-        xs[i] = x
-        status[i] = st
+    for i in range(loc.size):
+        xs[i], status[i] = _inner_one(code, kappa[i], loc[i], c, w, a_m, L_m, x0[i], has_x0)
 
 
 @_jit
@@ -405,61 +399,58 @@ def _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m):
 
 
 @_jit
-def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, xs, status):
-    """branches.solve_state under pressure control, in lock step over the rows as the numpy path.
+def _pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
+    """branches.solve_state under pressure control for one row: (x, kappa, status).
 
-    Unbracketed Newton on kappa for the gap of every active row; each iterate re-solves the unknown
-    of every row (from the last all-finite inner solution) and carries its derivative through that
-    solve by :func:`_propagate`; an iterate without inner solution gives NaN and the Newton step
-    backs off toward the last good kappa. ``kappa`` holds the start values and is overwritten.
+    Unbracketed Newton on kappa for the gap; each iterate re-solves the unknown (from the last finite
+    inner solution) and carries its derivative through that solve by :func:`_propagate`; an iterate
+    without inner solution gives NaN and the Newton step backs off toward the last good kappa.
     """
-    n = loc.size
     implicit = _implicit(code)
-    memo = x0.copy()
-    last_good = kappa.copy()
-    active = np.ones(n, dtype=np.bool_)
-    n_active = n
-    xi = np.empty(n)
-    st_i = np.zeros(n, dtype=np.int64)
+    memo, has_memo = x0, has_x0 and math.isfinite(x0)
+    last_good = kappa
+    lc = complex(loc, 0.0)
+    converged = False
+    xi = math.nan
     for _ in range(MAXITER):
-        if n_active == 0:
-            break
         if implicit:
-            _inner_rows(code, kappa, loc, c, w, a_m, L_m, memo, has_x0, xi, st_i)
-            finite = True
-            for i in range(n):
-                if not math.isfinite(xi[i]):
-                    finite = False
-                    break
-            if finite:
-                memo[:] = xi
-                has_x0 = True
-        for i in range(n):
-            if not active[i]:
-                continue
-            kc, lc = complex(kappa[i], STEP), complex(loc[i], 0.0)
-            xc = _propagate(code, xi[i], kappa[i], kc, lc, c, w, a_m, L_m) if implicit else 0j
-            sg = _state(code, xc, kc, lc, c, w, a_m, True)
-            g = sg[2] - d_fix if sg[6] else complex(math.nan, math.nan)
-            r, dr = g.real, g.imag / STEP
-            good = math.isfinite(r) and math.isfinite(dr) and dr != 0
-            if good:
-                last_good[i] = kappa[i]
-                step = -r / dr
-                kn = kappa[i] + step
-            else:
-                step = 0.0
-                kn = 0.5 * (kappa[i] + last_good[i])
-            if good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(kappa[i]))):
-                active[i] = False
-                n_active -= 1
-            kappa[i] = kn
-    if n_active > 0:
-        for i in range(n):
-            status[i] = FAIL_OUTER if active[i] else OK
-        return
-    if implicit:
-        _inner_rows(code, kappa, loc, c, w, a_m, L_m, memo, has_x0, xs, status)
+            xi, _st = _inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
+            if math.isfinite(xi):
+                memo, has_memo = xi, True
+        kc = complex(kappa, STEP)
+        xc = _propagate(code, xi, kappa, kc, lc, c, w, a_m, L_m) if implicit else 0j
+        sg = _state(code, xc, kc, lc, c, w, a_m, True)
+        g = sg[2] - d_fix if sg[6] else complex(math.nan, math.nan)
+        r, dr = g.real, g.imag / STEP
+        good = math.isfinite(r) and math.isfinite(dr) and dr != 0
+        if good:
+            last_good = kappa
+            step = -r / dr
+            kn = kappa + step
+        else:
+            step = 0.0
+            kn = 0.5 * (kappa + last_good)
+        converged = good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(kappa)))
+        kappa = kn
+        if converged:
+            break
+    if not converged:
+        return math.nan, kappa, FAIL_OUTER
+    if not implicit:
+        return 0.0, kappa, OK
+    x, st = _inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
+    return x, kappa, st
+
+
+@_jit
+def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, xs, status):
+    """branches.solve_state under pressure control, row by row (:func:`_pressure_one`).
+
+    ``kappa`` holds the start values and is overwritten.
+    """
+    for i in range(loc.size):
+        xs[i], kappa[i], status[i] = _pressure_one(code, loc[i], c, w, a_m, L_m, d_fix, kappa[i],
+                                                   x0[i], has_x0)
 
 
 @_jit
@@ -566,3 +557,331 @@ def first_bad(ok, a, alpha, p, d, f, G):
                 and math.isfinite(d[i]) and math.isfinite(f[i]) and math.isfinite(G[i])):
             return i
     return -1
+
+
+# ----------------------------------------------------------------------------------------------
+# continuation and extremum refinement (continuation.py) in one call each. They live in this file
+# because numba's cache is keyed on the defining file only: kernels in another module would keep
+# stale copies of the functions here after they change.
+
+F_OK, F_STALLED, F_STEPS = 0, 1, 2
+E_OK, E_SOLVE, E_SEARCH, E_NOCONV = 0, 1, 2, 3
+#: rows of an observation vector (as in compiled.evaluate_batch)
+KEY_CODES = {"a": 0, "alpha": 1, "p": 2, "d": 3, "f": 4, "G": 5, "J0": 6}
+
+
+@_jit
+def _solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix):
+    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``."""
+    xs, ks, status = solve_batch(code, pressure, np.array([loc]), np.array([k]), np.array([xg]),
+                                 _implicit(code), c, w, a_m, L_m, d_fix)
+    return xs[0], ks[0], status[0]
+
+
+@_jit
+def _observe(code, x, k, loc, c, w, a_m, out):
+    """Observables a, alpha, p, d, f, G, J0 of one real state into ``out``; returns ``ok``."""
+    a, alpha, d, f, G, j0, ok = _state(code, x, k, loc, c, w, a_m, True)
+    out[0], out[1], out[2], out[3], out[4], out[5], out[6] = a, alpha, k, d, f, G, j0
+    return ok
+
+
+@_jit
+def _admissible(ok, out):
+    """ok and a, alpha, p, d, f, G finite (continuation.extremum's test)."""
+    if not ok:
+        return False
+    for j in range(6):
+        if not math.isfinite(out[j]):
+            return False
+    return True
+
+
+@_jit
+def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, log, max_steps,
+                  allow_end):
+    """continuation.follow in one call.
+
+    Returns
+    -------
+    status : int
+        ``F_OK``, ``F_STALLED`` (the step fell below 1e-10 of the span) or ``F_STEPS``.
+    n_out : int
+        Targets reached (their x, kappa are ``out_x[:n_out]``, ``out_k[:n_out]``).
+    out_x, out_k : ndarray
+    path_l, path_x, path_k : ndarray
+        Every accepted step (locators, x, kappa); x NaN on explicit branches.
+    last : ndarray, shape (7,)
+        Observables a, alpha, p, d, f, G, J0 of the last accepted step (NaN if none).
+    """
+    implicit = _implicit(code)
+    n_t = targets.size
+    cap = max_steps + 2
+    ss, xs, ks = np.empty(cap), np.empty(cap), np.empty(cap)
+    out_x, out_k = np.empty(n_t), np.empty(n_t)
+    ss[0] = math.log(l0) if log else l0
+    xs[0] = x0 if implicit else math.nan
+    ks[0] = k0
+    m = 1
+    last = math.log(targets[n_t - 1]) if log else targets[n_t - 1]
+    span = abs(last - ss[0])
+    if span == 0.0:
+        span = 1.0
+    h = span / 16.0
+    i, steps, n_out, status = 0, 0, 0, F_OK
+    obs = np.empty(7)
+    last_obs = np.full(7, math.nan)
+    while i < n_t:
+        steps += 1
+        if steps > max_steps:
+            status = F_STEPS
+            break
+        goal = math.log(targets[i]) if log else targets[i]
+        gap = goal - ss[m - 1]
+        s_new = goal if abs(gap) <= h else ss[m - 1] + math.copysign(h, gap)
+        if m > 1 and ss[m - 1] != ss[m - 2]:
+            r = (s_new - ss[m - 1]) / (ss[m - 1] - ss[m - 2])
+            xg, kg = xs[m - 1] + r * (xs[m - 1] - xs[m - 2]), ks[m - 1] + r * (ks[m - 1] - ks[m - 2])
+        else:
+            xg, kg = xs[m - 1], ks[m - 1]
+        loc = math.exp(s_new) if log else s_new
+        x, k, st = _solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix)
+        good = st == 0
+        if good:
+            good = _observe(code, x, k, loc, c, w, a_m, obs) and math.isfinite(obs[4])
+        if not good:
+            h *= 0.5
+            if h < 1e-10 * span:
+                if not (allow_end and m > 1):
+                    status = F_STALLED
+                break
+            continue
+        ss[m], xs[m], ks[m] = s_new, (x if implicit else math.nan), k
+        last_obs[:] = obs
+        m += 1
+        if s_new == goal:
+            out_x[n_out], out_k[n_out] = xs[m - 1], ks[m - 1]
+            n_out += 1
+            i += 1
+        h = min(1.6 * h, span / 8.0)
+    path_l = np.empty(m)
+    for j in range(m):
+        path_l[j] = math.exp(ss[j]) if log else ss[j]
+    return status, n_out, out_x, out_k, path_l, xs[:m].copy(), ks[:m].copy(), last_obs
+
+
+@_jit
+def _solve_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix):
+    """continuation.extremum's solve: predictors interpolated from the rows."""
+    kg = np.interp(loc, rl, rk) if pressure else kappa
+    xg = np.interp(loc, rl, rx)
+    return _solve_one(code, pressure, loc, kg, xg, c, w, a_m, L_m, d_fix)
+
+
+@_jit
+def _slope_of(code, pressure, loc, x, k, c, w, a_m, L_m, key):
+    """d(observable ``key``)/d(locator) at a solved state (compiled.derivative_batch, one row)."""
+    xc, kc = _derivative_row(code, pressure, loc, x, k, c, w, a_m, L_m)
+    if key == 2:
+        return kc.imag / STEP
+    a, alpha, d, f, G, j0, _ = _state(code, xc, kc, complex(loc, STEP), c, w, a_m, True)
+    if key == 0:
+        return a.imag / STEP
+    if key == 1:
+        return alpha.imag / STEP
+    if key == 3:
+        return d.imag / STEP
+    if key == 4:
+        return f.imag / STEP
+    if key == 5:
+        return G.imag / STEP
+    return j0.imag / STEP
+
+
+@_jit
+def _slope_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key):
+    x, k, st = _solve_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix)
+    if st != 0:
+        return math.nan, st
+    return _slope_of(code, pressure, loc, x, k, c, w, a_m, L_m, key), 0
+
+
+@_jit
+def _value(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign, obs):
+    """sign * key at the solved state, -inf where it does not solve or is not admissible."""
+    x, k, st = _solve_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix)
+    if st != 0:
+        return -math.inf
+    ok = _observe(code, x, k, loc, c, w, a_m, obs)
+    return sign * obs[key] if _admissible(ok, obs) else -math.inf
+
+
+@_jit
+def _brent(code, pressure, xa, xb, fa, fb, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key,
+           xtol, rtol, maxiter):
+    """scipy.optimize.brentq (scipy/optimize/Zeros/brentq.c) on the slope: (root, status)."""
+    xpre, xcur, fpre, fcur = xa, xb, fa, fb
+    xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
+    if fpre == 0:
+        return xpre, E_OK
+    if fcur == 0:
+        return xcur, E_OK
+    for _ in range(maxiter):
+        if fpre != 0 and fcur != 0 and (math.copysign(1.0, fpre) != math.copysign(1.0, fcur)):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (xtol + rtol * abs(xcur)) / 2
+        sbis = (xblk - xcur) / 2
+        if fcur == 0 or abs(sbis) < delta:
+            return xcur, E_OK
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)   # interpolate
+            else:                                              # extrapolate
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
+                spre, scur = scur, stry                        # good short step
+            else:
+                spre, scur = sbis, sbis                        # bisect
+        else:
+            spre, scur = sbis, sbis
+        xpre, fpre = xcur, fcur
+        if abs(scur) > delta:
+            xcur += scur
+        else:
+            xcur += delta if sbis > 0 else -delta
+        fcur, st = _slope_at(code, pressure, xcur, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key)
+        if st != 0:
+            return xcur, E_SEARCH
+    return xcur, E_NOCONV
+
+
+@_jit
+def extremum_kernel(code, pressure, lo, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
+                    xtol, rtol, maxiter):
+    """continuation.extremum in one call.
+
+    Returns
+    -------
+    status : int
+        ``E_OK``; ``E_SOLVE`` (the state at the chosen locator does not solve), ``E_SEARCH`` (a solve
+        inside the root search failed) or ``E_NOCONV`` (the search did not converge).
+    loc : float
+    obs : ndarray, shape (7,)
+        a, alpha, p, d, f, G, J0 at ``loc``.
+    ok : bool
+    """
+    obs = np.empty(7)
+    best = lo
+    if lo != hi:
+        s_lo, _ = _slope_at(code, pressure, lo, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key)
+        s_hi, _ = _slope_at(code, pressure, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key)
+        v_best = _value(code, pressure, lo, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign, obs)
+        v = _value(code, pressure, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign, obs)
+        if v > v_best:
+            best, v_best = hi, v
+        if math.isfinite(s_lo) and math.isfinite(s_hi) and s_lo * s_hi < 0:
+            root, st = _brent(code, pressure, lo, hi, s_lo, s_hi, rl, rx, rk, kappa, c, w, a_m, L_m,
+                              d_fix, key, xtol, rtol, maxiter)
+            if st != E_OK:
+                return st, root, obs, False
+            v = _value(code, pressure, root, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
+                       obs)
+            if v > v_best:
+                best = root
+    x, k, st = _solve_at(code, pressure, best, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix)
+    if st != 0:
+        return E_SOLVE, best, obs, False
+    ok = _observe(code, x, k, best, c, w, a_m, obs)
+    return E_OK, best, obs, ok
+
+
+@_jit
+def solve_observe_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
+    """compiled.solve_batch followed by compiled.evaluate_batch at the solved states (one call).
+
+    Returns
+    -------
+    x, kappa, status : as solve_batch
+    out, ok : as evaluate_batch (meaningless where status is not OK)
+    bad : int
+        First row outside the model or with a non-finite a, alpha, p, d, f, G (compiled.first_bad);
+        -1 if none.
+    """
+    xs, ks, status = solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix)
+    n = loc.size
+    out = np.empty((7, n))
+    ok = np.zeros(n, dtype=np.bool_)
+    implicit = _implicit(code)
+    bad = -1
+    for i in range(n):
+        if status[i] != 0:
+            out[:, i] = math.nan
+            bad = i if bad < 0 else bad
+            continue
+        ok[i] = _observe(code, xs[i] if implicit else loc[i], ks[i], loc[i], c, w, a_m, out[:, i])
+        if bad < 0 and not _admissible(ok[i], out[:, i]):
+            bad = i
+    return xs, ks, status, out, ok, bad
+
+
+@_jit
+def _mc_gap(kc, a, c, d_fix):
+    """Gap residual of the making-contact state at complex pressure kc (NaN outside the model)."""
+    st = _state(MC, 0j, kc, complex(a, 0.0), c, 0.0, 0.0, True)
+    return st[2] - d_fix if st[6] else complex(math.nan, math.nan)
+
+
+@_jit
+def mc_pressure_batch(a, c, d_fix, lo, hi):
+    """branches.mc_pressure row by row: bracketed Newton (solve.newton's rules) on the gap.
+
+    Returns
+    -------
+    kappa : ndarray
+    status : ndarray of int64
+        ``OK``, ``FAIL_BRACKET`` or ``FAIL_INNER`` per row.
+    """
+    n = a.size
+    ks = np.empty(n)
+    status = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        l, h = lo[i], hi[i]
+        rlo = _mc_gap(complex(l, STEP), a[i], c, d_fix).real
+        rhi = _mc_gap(complex(h, STEP), a[i], c, d_fix).real
+        if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
+            ks[i], status[i] = math.nan, FAIL_BRACKET
+            continue
+        neg_at_lo = rlo < 0
+        x = min(max(0.5 * (l + h), min(l, h)), max(l, h))
+        status[i] = FAIL_INNER
+        for _ in range(MAXITER):
+            z = _mc_gap(complex(x, STEP), a[i], c, d_fix)
+            r, dr = z.real, z.imag / STEP
+            finite = math.isfinite(r) and math.isfinite(dr)
+            below = finite and ((r < 0) if neg_at_lo else (r > 0))
+            if below:
+                l = x
+            elif finite:
+                h = x
+            xn = x + (-r / dr) if (finite and dr != 0) else math.nan
+            inside = math.isfinite(xn) and min(l, h) <= xn <= max(l, h)
+            exact = finite and r == 0
+            if exact:
+                xn = x
+            elif not inside:
+                xn = 0.5 * (l + h)
+            tol = XTOL * (1.0 + abs(x))
+            done = exact or (inside and abs(xn - x) <= tol) or abs(h - l) <= tol
+            x = xn
+            if done:
+                if finite:
+                    status[i] = OK
+                break
+        ks[i] = x if status[i] == OK else math.nan
+    return ks, status
