@@ -47,7 +47,7 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--scene", type=Path, default=None, metavar="SCENE.toml",
                    help="scene file: geometry and the fixed pressure or gap (default: the nearest "
                         "scene.toml in the curve's folder or, for a folder argument, its parents)")
-    p.add_argument("--method", choices=METHODS, default="lsq", help="lsq (least squares); mcmc: not yet")
+    p.add_argument("--method", choices=METHODS, default="lsq", help="lsq: least squares (lmfit); mcmc: posterior sampling (emcee), both slips, model probabilities")
     p.add_argument("--slip", choices=SLIP_CHOICES, default=None,
                    help="slip condition; default: the scene's (auto = fit both and compare)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (recorded; lsq draws none)")
