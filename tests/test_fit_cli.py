@@ -111,7 +111,6 @@ def test_missing_data_file(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra, word", [
-    (("--method", "mcmc"), "mcmc"),
     (("--method", "bayes"), "method"),
     (("--sigma", "3 kPa"), "sigma"),
     (("--slip", "sticky"), "slip"),

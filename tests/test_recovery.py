@@ -37,8 +37,8 @@ def _replicate(case, slip, seed, noise=0.005, fit_slip="auto", profile=True):
 
 
 def _misses(result) -> list[str]:
-    return [name for name in TRUE
-            if not result.parameters[name].ci95[0] <= TRUE[name] <= result.parameters[name].ci95[1]]
+    ci = {name: result.parameters[name].ci95 for name in TRUE}
+    return [name for name in TRUE if ci[name] is None or not ci[name][0] <= TRUE[name] <= ci[name][1]]
 
 
 def _check_point(result, slip):

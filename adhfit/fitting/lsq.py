@@ -34,7 +34,7 @@ __all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimi
 #: relative finite-difference step of the Jacobian (the history's solver noise is ~1e-12)
 DIFF_STEP = 1e-6
 #: optimiser tolerances (scipy ftol = xtol = gtol) at an optimum, and for a start's first descent
-FINE_TOL = 1e-9
+FINE_TOL = 1e-8
 COARSE_TOL = 1e-5
 #: residual of a parameter set outside the model's domain, per row, in units of s
 PENALTY = 1e3
@@ -192,6 +192,12 @@ def _run_starts(residual, par, runs, *, scale_covar):
         starts.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr)})
         if best is None or res.chisqr < best.chisqr:
             best = res
+    if best.aborted or best.covar is None:
+        # the optimiser can keep chasing ~1e-9 gains across the kink at the turning point until
+        # max_nfev; a short coarse run from its best point ends cleanly and yields the covariance
+        polish = minimise(residual, best.params, scale_covar=scale_covar, tol=COARSE_TOL, max_nfev=150)
+        if polish.covar is not None and polish.chisqr <= best.chisqr * (1.0 + 1e-6):
+            best = polish
     return best, starts
 
 

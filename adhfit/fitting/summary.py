@@ -116,7 +116,7 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
     sigma = raw.scale if raw.sigma_given else raw.scale * math.sqrt(best.redchi)
     residual = residual_function(m, par, raw.scale, sigma)
     profiles = {}
-    if profile and best.covar is not None:
+    if profile:  # without a covariance the profile still works, from a 10 % first step
         for name in ("work_of_adhesion", "mu_h"):
             profiles[name] = profile_interval(residual, best, INTERNAL[name], sigma_given=raw.sigma_given)
     est = _estimates(raw, profiles)
