@@ -21,10 +21,18 @@ def _row(e) -> str:
     return f"| {e.symbol} ({e.name}) | {e.value * k:.5g} ± {se} | {ci} ({e.ci_method or 'none'}) | {unit} |"
 
 
+def _how(result) -> str:
+    """How the values and intervals were obtained; the method column of the table says it per row."""
+    if getattr(result, "provenance", {}).get("method") == "mcmc":
+        return ("Values are posterior medians ± posterior standard deviations; 95 % intervals are "
+                "posterior percentiles (credible intervals).")
+    return ("Values ± standard errors (covariance); 95 % intervals from the likelihood profile where "
+            "it converged, else from the covariance.")
+
+
 def _estimates(result) -> list[str]:
     out = ["## Estimates", "",
-           f"Reported fit: **{result.reported_slip}**. Values ± standard errors (covariance); 95 % intervals "
-           "from the likelihood profile where it converged, else from the covariance.", "",
+           f"Reported fit: **{result.reported_slip}**. " + _how(result), "",
            "| parameter | value ± stderr | 95 % interval | unit |", "|---|---|---|---|"]
     out += [_row(e) for e in result.parameters.values()]
     fit = result.fits[result.reported_slip]
