@@ -30,6 +30,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import numpy as np  # noqa: E402
 
@@ -37,15 +38,7 @@ import adhfit  # noqa: E402
 from adhfit.core import backend  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
-BASE = {"w": 0.2, "a_max": 0.25}
-CASES = [
-    (f"{control} / {slip} / {sub}", control, slip,
-     {**BASE, "rs": rs, **({"p": 0.6} if control == "displacement" else {"d": d})})
-    for control in ("displacement", "pressure")
-    for slip in ("frictionless", "no-slip")
-    for sub, rs, d in (("rs=0.5", 0.5, 0.0), ("flat", math.inf, 0.2))
-]
-HEADLINE = "displacement / frictionless / rs=0.5"
+from cases import CASES, HEADLINE  # noqa: E402 - shared with the other benchmark
 
 FIRST_CALL = """
 import time, sys

@@ -47,17 +47,8 @@ from adhfit.loading import history  # noqa: E402
 import baseline_quad  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
-BASE = {"w": 0.2, "a_max": 0.25}
-#: (label, control, slip, keyword arguments)
-CASES = [
-    (f"{control} / {slip} / {sub}", control, slip,
-     {**BASE, "rs": rs, **({"p": 0.6} if control == "displacement" else {"d": d})})
-    for control in ("displacement", "pressure")
-    for slip in ("frictionless", "no-slip")
-    for sub, rs, d in (("rs=0.5", 0.5, 0.0), ("flat", math.inf, 0.2))
-]
 POINTS = (50, 200, 1000)
-HEADLINE = "displacement / frictionless / rs=0.5"
+from cases import CASES, HEADLINE  # noqa: E402 - shared with the other benchmark
 
 
 def engine_revision() -> str:
