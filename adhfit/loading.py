@@ -18,8 +18,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .core import delamination
-from .core.backend import (check_ok, evaluate, extremum, follow, mc_pressure, solve_rows,
-                           solve_state)
+from .core.backend import (check_ok, compiled_kernels, evaluate, extremum, follow, mc_pressure,
+                           solve_rows, solve_state)
+from .core.continuation import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL
 from .core.branches import BRANCHES, Context
 from .core.inflation import apex_deflection, critical_pressure
 from .core.solve import newton
@@ -331,10 +332,49 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     """
     v, c, pc = _prepare(control, slip, p, d, w, rs, a_max, delta_max, p_max, lambda0, points)
     v["slip"] = slip
+    info = {"control": control, "slip": slip, **{k: v[k] for k in v if k != "slip"}}
+    kernels = compiled_kernels()
+    if kernels is not None:
+        fast = _history_compiled(kernels, v, c, pc, info)
+        if fast is not None:
+            return fast
+    return _history_steps(v, c, pc, info)
+
+
+def _history_compiled(K, v, c, pc, info):
+    """The whole history in one compiled call (``compiled.history_kernel``); None when it fails.
+
+    The kernel repeats :func:`_history_steps` step by step; on failure the caller runs those steps,
+    which raise the error with its full message.
+    """
+    d_fix = float(v["d"]) if pc else 0.0
+    kappa_dc = 0.0 if pc else float(v["p"])
+    p_cr = 2.0 * d_fix / (1.0 + d_fix * d_fix) if pc else 0.0  # critical_pressure
+    u_mc, u_pin, u_dl = _grids(v["points"])
+    status, out, counts, tp_pos, summ, f_max, branch_end = K.history_kernel(
+        pc, v["slip"] == "no-slip", kappa_dc, d_fix, p_cr, c, float(v["w"]), float(v["a_max"]),
+        u_mc, u_pin, u_dl, A_END, BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER)
+    if status != K.H_OK:
+        return None
+    cols = dict(zip(("a", "alpha", "p", "d", "f", "G", "delta"), out))
+    cols["stage"] = np.repeat(_STAGE_LABELS, counts)
+    cols["stable"] = np.arange(out.shape[1]) <= tp_pos
+    dpt = d_fix if pc else None
+    rows = [dict(zip(_KEYS, map(float, r))) for r in summ]
+    summary = {"f_max": float(f_max), "onset": _point(rows[K.S_ONSET], pc, dpt),
+               "f_min": _point(rows[K.S_FMIN], pc, dpt),
+               "turning_point": _point(rows[K.S_TP], pc, dpt)}
+    if branch_end == branch_end:  # not NaN
+        info["delamination_ends_at_a"] = float(branch_end)
+    return History(cols, summary, info)
+
+
+def _history_steps(v, c, pc, info):
+    """The history step by step (the readable reference of ``compiled.history_kernel``)."""
+    slip = v["slip"]
     d_fix = v.get("d")
     kappa_dc = v.get("p")
     u_mc, u_pin, u_dl = _grids(v["points"])
-    info = {"control": control, "slip": slip, **{k: v[k] for k in v if k != "slip"}}
 
     # 1. making contact, a in (0, a_m]; a = 0 is free inflation. The last row is the end of loading
     # (_cluster ends at 1.0 exactly), whose edge material coordinate L_m the later stages need.

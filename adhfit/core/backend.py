@@ -22,7 +22,7 @@ from ..errors import ConvergenceError
 from . import branches, continuation
 from .branches import Branch, Context
 
-__all__ = ["evaluate", "solve_state", "derivative", "check_ok", "solve_rows", "mc_pressure", "follow",
+__all__ = ["evaluate", "solve_state", "compiled_kernels", "derivative", "check_ok", "solve_rows", "mc_pressure", "follow",
            "extremum", "active", "use", "ENV"]
 
 #: environment variable that selects the backend
@@ -58,6 +58,11 @@ def _compiled():
     if _active is _UNSET:
         _active = _resolve(os.environ.get(ENV, "auto").strip().lower() or "auto")
     return _active
+
+
+def compiled_kernels():
+    """The compiled kernel module when the numba backend is in use, else None."""
+    return _compiled()
 
 
 def active() -> str:

@@ -885,3 +885,267 @@ def mc_pressure_batch(a, c, d_fix, lo, hi):
                 break
         ks[i] = x if status[i] == OK else math.nan
     return ks, status
+
+
+# ----------------------------------------------------------------------------------------------
+# a whole history in one call (loading.history's orchestration, for speed)
+#
+# loading.py is the readable reference of these steps (and what runs under the numpy backend);
+# this kernel repeats them in the same order with the same solver calls, so it gives the same rows.
+# It never raises and reports no details: on any failure it returns H_FAIL and the Python layer
+# re-runs the reference orchestration, which raises the error with its full message.
+
+H_OK, H_FAIL = 0, 1
+#: rows of the summary array returned by history_kernel: onset, f_min, turning point
+S_ONSET, S_FMIN, S_TP = 0, 1, 2
+
+
+@_jit
+def _all_good(status, ok, out):
+    """Every row solved, admissible and with a finite force (loading._solve_rows' acceptance)."""
+    for i in range(ok.size):
+        if status[i] != 0 or not ok[i] or not math.isfinite(out[4, i]):
+            return False
+    return True
+
+
+@_jit
+def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fix, l0, x0, k0,
+            log):
+    """loading._solve_rows with a start state: vectorised solve, else follow the branch through the rows.
+
+    Returns (x, kappa, out, good): ``good`` False when the rows have a state outside the model.
+    """
+    n = locs.size
+    kin = kg.copy() if pressure else np.full(n, kappa_dc)
+    xs, ks, status, out, ok, bad = solve_observe_batch(code, pressure, locs, kin, xg, has_xg, c, w,
+                                                       a_m, L_m, d_fix)
+    if _all_good(status, ok, out):
+        return xs, ks, out, bad < 0
+    st, n_out, ox, okp, _, _, _, _ = follow_kernel(code, pressure, l0, locs, x0, k0, c, w, a_m,
+                                                   L_m, d_fix, log, 2000, False)
+    if st != F_OK or n_out != n:
+        return xs, ks, out, False
+    xe = ox if _implicit(code) else locs
+    out, ok = evaluate_batch(code, xe, okp, locs, c, w, a_m)
+    return ox, okp, out, first_bad(ok, out[0], out[1], out[2], out[3], out[4], out[5]) < 0
+
+
+@_jit
+def _extremum_k(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w, a_m, L_m,
+                d_fix, key, sign, xtol, rtol, maxiter):
+    """One call of loading._extrema's search on its stage: (locator, observables, good)."""
+    n = locs.size
+    j0, j1 = max(i - 2, 0), min(i + 3, n)
+    order = np.argsort(locs[j0:j1])
+    rl = locs[j0:j1][order]
+    rx = (xs[j0:j1] if implicit else np.full(j1 - j0, math.nan))[order]
+    rk = out[2, j0:j1][order]
+    if lo != hi:
+        lo, hi = min(lo, hi), max(lo, hi)
+    else:
+        lo, hi = locs[i], locs[i]
+    st, loc, obs, ok = extremum_kernel(code, pressure, lo, hi, rl, rx, rk,
+                                       0.0 if pressure else kappa_dc, c, w, a_m, L_m, d_fix, key,
+                                       sign, xtol, rtol, maxiter)
+    return loc, obs, st == E_OK and _admissible(ok, obs)
+
+
+@_jit
+def _apex(p):
+    """inflation.apex_deflection for one pressure (NaN where |p| > 1)."""
+    if abs(p) > 1.0:
+        return math.nan
+    return p / (1.0 + math.sqrt(1.0 - p * p))
+
+
+@_jit
+def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, u_pin, u_dl,
+                   a_end_rel, xtol, rtol, maxiter):
+    """loading.history after validation, in one call (see the comment above).
+
+    Returns
+    -------
+    status : int
+        ``H_OK`` or ``H_FAIL``.
+    cols : ndarray, shape (7, n)
+        ``a, alpha, p, d, f, G, delta`` in history order.
+    counts : ndarray of int64, shape (3,)
+        Rows of making contact (with the free-inflation row), pinning, delamination.
+    tp_pos : int
+        Row of the turning point (rows up to it are ``stable``).
+    summary : ndarray, shape (3, 6)
+        ``a, alpha, p, d, f, G`` at the onset, f_min and the turning point.
+    f_max : float
+    branch_end : float
+        Contact radius where the no-slip delamination branch ends (NaN when it reaches the end).
+    """
+    fail = (H_FAIL, np.empty((7, 0)), np.zeros(3, dtype=np.int64), 0, np.empty((3, 6)), math.nan,
+            math.nan)
+    pin_code = PIN_NS if no_slip else PIN_FR
+    dl_code = DEL_NS if no_slip else DEL_FR
+    dl_implicit = _implicit(dl_code)
+
+    # 1. making contact, a in (0, a_m]
+    n_mc = u_mc.size
+    a_mc = a_max * u_mc
+    if pressure:
+        hi = np.empty(n_mc)
+        for i in range(n_mc):
+            hi[i] = (1.0 + c * a_mc[i] * a_mc[i]) / (1.0 - a_mc[i] * a_mc[i]) * (1 - 1e-12)
+        k_mc, st_mc = mc_pressure_batch(a_mc, c, d_fix, np.full(n_mc, p_cr), hi)
+        for i in range(n_mc):
+            if st_mc[i] != OK:
+                return fail
+    else:
+        k_mc = np.full(n_mc, kappa_dc)
+    out_mc, ok_mc = evaluate_batch(MC, a_mc, k_mc, a_mc, c, w, math.nan)
+    if first_bad(ok_mc, out_mc[0], out_mc[1], out_mc[2], out_mc[3], out_mc[4], out_mc[5]) >= 0:
+        return fail
+    a_m, L_m, kappa_m = a_max, out_mc[6, n_mc - 1], k_mc[n_mc - 1]
+
+    # 2. onset: follow pinning from its start (G = 0 / alpha = 0) to G = w / alpha = atan sqrt(2w)
+    end = w if no_slip else math.atan(math.sqrt(2.0 * w))
+    st, _, _, _, pl, px, pk, _ = follow_kernel(pin_code, pressure, 0.0, np.array([end]),
+                                               1.0 if no_slip else a_m, kappa_m, c, w, a_m, L_m,
+                                               d_fix, False, 2000, False)
+    if st != F_OK:
+        return fail
+    on_x, on_k = px[px.size - 1], pk[pk.size - 1]
+    onset = np.empty(7)
+    if not _admissible(_observe(pin_code, on_x, on_k, end, c, w, a_m, onset), onset):
+        return fail
+    a_on, k_on = onset[0], onset[2]
+
+    # 3. pinning rows, predictors from the path
+    n_pin = u_pin.size
+    lp = end * (u_pin * u_pin if no_slip else u_pin)
+    kg = np.interp(lp, pl, pk)
+    xg = np.interp(lp, pl, px)
+    x_pin, k_pin, out_pin, good = _rows_k(pin_code, pressure, lp, kappa_dc, kg, xg, True, c, w,
+                                          a_m, L_m, d_fix, pl[0], px[0], pk[0], False)
+    if not good:
+        return fail
+
+    # 4. delamination, a from a_on toward detachment
+    pull_off = math.sqrt(2.0 * w) / (2.0 * (abs(k_on) + c + 1.0))
+    a_end = min(a_end_rel * a_m, 0.1 * pull_off)
+    x_start = on_x if no_slip else math.nan
+    branch_end = math.nan
+    n_dl = u_dl.size
+    has_path = pressure or dl_implicit
+    dl_l, dl_x, dl_k = np.empty(0), np.empty(0), np.empty(0)
+    if has_path:
+        st, n_out, _, _, dl_l, dl_x, dl_k, _ = follow_kernel(
+            dl_code, pressure, a_on, np.array([a_end]), x_start, k_on, c, w, a_m, L_m, d_fix,
+            True, 2000, no_slip)
+        if st != F_OK:
+            return fail
+        if n_out == 0:
+            branch_end = dl_l[dl_l.size - 1]
+            a_end = branch_end
+    a_dl = a_end + (a_on - a_end) * u_dl
+    kg = np.full(n_dl, k_on)
+    xg = a_dl.copy()
+    if has_path:
+        # the path runs from a_on down: reversed, its locators ascend (np.interp needs that)
+        rl, rxp, rkp = dl_l[::-1].copy(), dl_x[::-1].copy(), dl_k[::-1].copy()
+        kg = np.interp(a_dl, rl, rkp)
+        if dl_implicit:
+            xg = np.interp(a_dl, rl, rxp)
+            if not math.isnan(branch_end):
+                xg[n_dl - 1] = dl_x[dl_x.size - 1]
+    x_dl, k_dl, out_dl, good = _rows_k(dl_code, pressure, a_dl, kappa_dc, kg, xg, dl_implicit, c,
+                                       w, a_m, L_m, d_fix, a_on, x_start, k_on, True)
+    if not good:
+        return fail
+
+    # 5. extrema: turning point of the control variable, then the force minimum
+    summary = np.empty((3, 6))
+    summary[S_ONSET, :] = onset[:6]
+    ext_stage = np.zeros(2, dtype=np.int64)
+    ext_loc = np.empty(2)
+    for e in range(2):
+        if e == 0:
+            key, sign = (2, -1.0) if pressure else (3, 1.0)
+        else:
+            key, sign = 4, -1.0
+        j, best = 0, -math.inf
+        for i in range(n_pin):
+            v = sign * out_pin[key, i]
+            if v > best:
+                j, best = i, v
+        for i in range(n_dl):
+            v = sign * out_dl[key, i]
+            if v > best:
+                j, best = n_pin + i, v
+        if j < n_pin:
+            i = j
+            lo = lp[i - 1] if i > 0 else 0.0
+            hi = lp[i + 1] if i + 1 < n_pin else lp[i]
+            loc, obs, good = _extremum_k(pin_code, pressure, lp, x_pin, True, out_pin, i, lo, hi,
+                                         kappa_dc, c, w, a_m, L_m, d_fix, key, sign, xtol, rtol,
+                                         maxiter)
+            ext_stage[e] = 1
+        else:
+            i = j - n_pin
+            lo = a_dl[i - 1] if i > 0 else a_on
+            hi = a_dl[i + 1] if i + 1 < n_dl else a_dl[i]
+            loc, obs, good = _extremum_k(dl_code, pressure, a_dl, x_dl, dl_implicit, out_dl, i, lo,
+                                         hi, kappa_dc, c, w, a_m, L_m, d_fix, key, sign, xtol,
+                                         rtol, maxiter)
+            ext_stage[e] = 2
+        if not good:
+            return fail
+        ext_loc[e] = loc
+        summary[S_TP if e == 0 else S_FMIN, :] = obs[:6]
+
+    # 6. assemble: free inflation, making contact, pinning, delamination; insert the extrema
+    n0 = 1 + n_mc + n_pin + n_dl
+    base = np.empty((6, n0 + 2))
+    locs = np.empty(n0)
+    base[:, 0] = 0.0
+    base[2, 0] = p_cr if pressure else kappa_dc
+    base[3, 0] = d_fix if pressure else _apex(kappa_dc)
+    locs[0] = 0.0
+    base[:, 1:1 + n_mc] = out_mc[:6]
+    locs[1:1 + n_mc] = a_mc
+    base[:, 1 + n_mc:1 + n_mc + n_pin] = out_pin[:6]
+    locs[1 + n_mc:1 + n_mc + n_pin] = lp
+    base[:, 1 + n_mc + n_pin:n0] = out_dl[:6]
+    locs[1 + n_mc + n_pin:] = a_dl
+    counts = np.array([1 + n_mc, n_pin, n_dl], dtype=np.int64)
+    take = np.arange(n0)
+    n_extra = 0
+    tp_pos = -1
+    for e in (1, 0):  # sorted by name: f_min, then turning_point
+        rank, lc = ext_stage[e], ext_loc[e]
+        s0 = counts[0] + (counts[1] if rank == 2 else 0)
+        m = counts[rank]
+        k = m
+        for q in range(m):
+            lq = locs[s0 + q]
+            if (lq <= lc + 1e-15) if rank == 2 else (lq >= lc - 1e-15):
+                k = q
+                break
+        j = s0 + k
+        if not (k < m and abs(locs[j] - lc) <= 1e-14):
+            base[:, n0 + n_extra] = summary[S_TP if e == 0 else S_FMIN, :]
+            take = np.concatenate((take[:j], np.array([n0 + n_extra]), take[j:]))
+            locs = np.concatenate((locs[:j], np.array([lc]), locs[j:]))
+            counts[rank] += 1
+            n_extra += 1
+            if tp_pos >= 0 and j <= tp_pos:
+                tp_pos += 1
+        if e == 0:
+            tp_pos = j
+    n = take.size
+    cols = np.empty((7, n))
+    for r in range(n):
+        src = take[r]
+        for k in range(6):
+            cols[k, r] = base[k, src] + 0.0
+        if pressure:
+            cols[3, r] = d_fix
+        cols[6, r] = _apex(cols[2, r]) - cols[3, r]
+    return H_OK, cols, counts, tp_pos, summary, out_mc[4, n_mc - 1], branch_end
