@@ -609,8 +609,12 @@ def _pinning_at_alpha(branch, alpha, ctx, pc, kappa, d_fix, kappa_m, onset, path
         return at(alpha)
     if alpha == 0.0:
         return at(0.0)
-    G = brentq(lambda g: float(np.real(at(g)["alpha"][0])) - alpha, 0.0, ctx.w,
-               xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    def gap(g):
+        return float(np.real(at(g)["alpha"][0])) - alpha
+
+    if gap(ctx.w) <= 0.0:  # alpha is the onset's angle (to rounding): the state at G = w
+        return at(ctx.w)
+    G = brentq(gap, 0.0, ctx.w, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
     return at(G)
 
 

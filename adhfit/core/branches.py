@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import ConvergenceError
 from . import delamination, making_contact, pinning
 from .membrane import free_membrane, substrate_cos
-from .solve import STEP, newton
+from .solve import STEP, XTOL, newton
 
 __all__ = ["Context", "Branch", "BRANCHES", "evaluate", "solve_unknown", "solve_state", "derivative"]
 
@@ -222,6 +222,96 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
     if d_fix is None:
         kappa = np.broadcast_to(np.asarray(kappa, float), loc.shape)
         return solve_unknown(branch, kappa, loc, ctx, x0), kappa
+    k0 = np.broadcast_to(np.asarray(kappa0, float), loc.shape)
+    if branch.target is None or x0 is None:
+        return _solve_nested(branch, loc, ctx, d_fix, k0, x0)
+    x0 = np.broadcast_to(np.asarray(x0, float), loc.shape)
+    x, kappa, good = _joint_newton(branch, loc, ctx, d_fix, k0, x0)
+    if np.all(good):
+        return x, kappa
+    rest = ~good
+    try:
+        xr, kr = _solve_nested(branch, loc[rest], ctx, d_fix, k0[rest], x0[rest])
+    except ConvergenceError as err:  # name the row of the whole array
+        if "index" not in err.inputs:
+            raise
+        index = int(np.flatnonzero(rest.ravel())[err.inputs["index"]])
+        raise ConvergenceError(err.what, {**err.inputs, "index": index}) from None
+    x, kappa = x.copy(), kappa.copy()
+    x[rest], kappa[rest] = xr, kr
+    return x, kappa
+
+
+#: iterations of the joint (x, kappa) Newton before the nested solve takes over
+JOINT_MAXITER = 12
+#: it stops after a Newton step below JOINT_STOP (1 + |x|): convergence is quadratic, so the error
+#: left after that step is ~M 1e-18 (M the ratio of second to first derivatives), far below XTOL
+JOINT_STOP = 1e-9
+#: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
+#: step before it; otherwise the next iteration takes a fresh Jacobian
+CHORD_RATE = 0.01
+
+
+def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
+    """Pressure control: Newton on (material condition, gap) in (x, kappa) jointly, from predictors.
+
+    The first iteration takes the exact 2x2 Jacobian from two complex steps; later ones reuse it
+    (chord steps, one real evaluation each) while each step is below CHORD_RATE times the one before
+    and take a fresh Jacobian otherwise. From a continuation predictor a row converges in one Newton
+    and one or two chord steps, several times cheaper than the nested solve. It stops after a Newton
+    step below JOINT_STOP or a chord step that leaves an error below XTOL.
+
+    No safeguard: a non-finite or inadmissible iterate, a singular Jacobian, no convergence in
+    JOINT_MAXITER iterations or a root outside x's bracket marks the row failed (``good`` False);
+    the caller solves those rows by the nested, safeguarded method.
+
+    Returns
+    -------
+    x, kappa : ndarray
+    good : ndarray of bool
+    """
+    x, k = np.array(x0, float), np.array(k0, float)
+    alive = np.isfinite(x) & np.isfinite(k)
+    done = np.zeros(loc.shape, bool)
+    fresh = np.ones(loc.shape, bool)
+    prev = np.full(loc.shape, np.inf)
+    Rx, Gx, Rk, Gk = (np.zeros(loc.shape) for _ in range(4))
+    target = np.real(branch.target(loc + 0j, ctx))
+    with np.errstate(all="ignore"):
+        for _ in range(JOINT_MAXITER):
+            run = alive & ~done
+            if not run.any():
+                break
+            e1 = evaluate(branch, x + 1j * STEP, k + 0j, loc, ctx)
+            e2 = evaluate(branch, x + 0j, k + 1j * STEP, loc, ctx)
+            e0 = evaluate(branch, x, k, loc, ctx)
+            Rx, Gx = (np.where(fresh, np.imag(e1[q]) / STEP, old) for q, old in (("J0", Rx), ("d", Gx)))
+            Rk, Gk = (np.where(fresh, np.imag(e2[q]) / STEP, old) for q, old in (("J0", Rk), ("d", Gk)))
+            R = np.where(fresh, np.real(e1["J0"]), e0["J0"]) - target
+            G = np.where(fresh, np.real(e1["d"]), e0["d"]) - d_fix
+            det = Rx * Gk - Rk * Gx
+            ok = np.where(fresh, e1["ok"] & e2["ok"], e0["ok"])
+            fine = ok & np.isfinite(R) & np.isfinite(G) & np.isfinite(det) & (det != 0)
+            alive &= fine | done
+            run &= fine
+            exact = (R == 0) & (G == 0)
+            dx = np.where(exact, 0.0, -(R * Gk - Rk * G) / det)
+            dk = np.where(exact, 0.0, -(Rx * G - R * Gx) / det)
+            size = np.maximum(np.abs(dx) / (1.0 + np.abs(x)), np.abs(dk) / (1.0 + np.abs(k)))
+            # a Newton step leaves an error of ~M size^2; a chord step ~(size / prev) size
+            small = np.where(fresh, size <= JOINT_STOP, size * np.minimum(1.0, size / prev) <= XTOL)
+            x = np.where(run, x + dx, x)
+            k = np.where(run, k + dk, k)
+            done |= run & (exact | small)
+            fresh = np.where(run, ~(size <= CHORD_RATE * prev), fresh)
+            prev = np.where(run, size, prev)
+    lo, hi = branch.bracket(k, loc, ctx)
+    inside = (x >= np.minimum(lo, hi)) & (x <= np.maximum(lo, hi))
+    return x, k, alive & done & inside
+
+
+def _solve_nested(branch, loc, ctx, d_fix, k0, x0):
+    """Pressure control, safeguarded: Newton on kappa for the gap around the inner solve of x."""
     memo = {"x": None if x0 is None else np.broadcast_to(np.asarray(x0, float), loc.shape)}
 
     def gap(kc):
@@ -235,7 +325,6 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
         e = evaluate(branch, xc, kc, loc, ctx)
         return np.where(e["ok"], e["d"] - d_fix, np.nan)
 
-    k0 = np.broadcast_to(np.asarray(kappa0, float), loc.shape)
     kappa = newton(gap, k0, what=f"{branch.stage} ({branch.slip}): pressure from the fixed gap",
                    inputs={"d": d_fix, "w": ctx.w, "a_m": ctx.a_m})
     x = solve_unknown(branch, kappa, loc, ctx, memo.get("x"))

@@ -37,6 +37,14 @@ OK, FAIL_BRACKET, FAIL_INNER, FAIL_OUTER = 0, 1, 2, 3
 STEP = 1e-30
 XTOL = 4e-15
 MAXITER = 60
+#: iterations of the joint (x, kappa) Newton before the nested solve takes over (as in branches)
+JOINT_MAXITER = 12
+#: the joint Newton stops after a Newton step below JOINT_STOP (1 + |x|): convergence is quadratic,
+#: so the error left after that step is ~M 1e-18 (M the ratio of second to first derivatives)
+JOINT_STOP = 1e-9
+#: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
+#: step before it; otherwise the next iteration takes a fresh Jacobian
+CHORD_RATE = 0.01
 #: relative truncation error aimed at in the Carlson series (both are 7th-degree, DLMF 19.36.1-2)
 _RERR = 1e-16
 _RF_FACTOR = 1.0 / (3.0 * _RERR) ** 0.125
@@ -399,14 +407,106 @@ def _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m):
 
 
 @_jit
+def _stop(fresh, size, prev):
+    """Converged after a step of relative ``size``: a Newton step (fresh Jacobian) leaves an error of
+    ~M size^2, so size <= JOINT_STOP suffices; a chord step leaves ~(size / prev) size, which must be
+    below XTOL."""
+    if fresh:
+        return size <= JOINT_STOP
+    return size * min(1.0, size / prev) <= XTOL
+
+
+@_jit
+def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x):
+    """branches._joint_newton for one row: (x, kappa, converged).
+
+    Newton on the pair (material condition, gap) in (x, kappa) from a predictor. The first
+    iteration takes the exact 2x2 Jacobian from two complex steps; later ones reuse it (chord steps,
+    one real evaluation each) while each step is below CHORD_RATE times the one before, and take a
+    fresh Jacobian otherwise. It stops as :func:`_stop` says. No safeguard: a non-finite or
+    inadmissible iterate, a singular Jacobian, no convergence in JOINT_MAXITER or a root outside x's
+    bracket is a failure.
+    """
+    lc = complex(loc, 0.0)
+    tgt = _target(code, lc, c, a_m, L_m).real
+    Rx = Gx = Rk = Gk = det = 0.0
+    fresh = True
+    prev = math.inf
+    for _ in range(JOINT_MAXITER):
+        if fresh:
+            s1 = _state(code, complex(x, STEP), complex(kappa, 0.0), lc, c, w, a_m, True)
+            s2 = _state(code, complex(x, 0.0), complex(kappa, STEP), lc, c, w, a_m, True)
+            if not (s1[6] and s2[6]):
+                return math.nan, math.nan, False
+            R, G = s1[5].real - tgt, s1[2].real - d_fix
+            Rx, Gx = s1[5].imag / STEP, s1[2].imag / STEP
+            Rk, Gk = s2[5].imag / STEP, s2[2].imag / STEP
+            det = Rx * Gk - Rk * Gx
+        else:
+            s0 = _state(code, x, kappa, loc, c, w, a_m, True)
+            if not s0[6]:
+                return math.nan, math.nan, False
+            R, G = s0[5] - tgt, s0[2] - d_fix
+        if not (math.isfinite(R) and math.isfinite(G) and math.isfinite(det)) or det == 0:
+            return math.nan, math.nan, False
+        exact = R == 0 and G == 0
+        dx = -(R * Gk - Rk * G) / det
+        dk = -(Rx * G - R * Gx) / det
+        size = max(abs(dx) / (1.0 + abs(x)), abs(dk) / (1.0 + abs(kappa)))
+        if not exact:
+            x, kappa = x + dx, kappa + dk
+        if exact or _stop(fresh, size, prev):
+            lo, hi = _bracket(code, loc, c, w, a_m)
+            return x, kappa, min(lo, hi) <= x <= max(lo, hi)
+        fresh = not (size <= CHORD_RATE * prev)
+        prev = size
+    return math.nan, math.nan, False
+
+
+@_jit
+def _gap_from(code, loc, c, w, a_m, d_fix, kappa, lo, hi):
+    """Pressure control on an explicit branch (making contact, frictionless delamination): kappa for
+    the gap from a predictor, Newton with chord steps as in :func:`_joint_one`; (kappa, converged).
+
+    Converged also requires the root inside [lo, hi] (pass -inf, inf for no bracket)."""
+    lc = complex(loc, 0.0)
+    dr = 0.0
+    fresh = True
+    prev = math.inf
+    for _ in range(JOINT_MAXITER):
+        if fresh:
+            st = _state(code, 0j, complex(kappa, STEP), lc, c, w, a_m, True)
+            r, dr = st[2].real - d_fix, st[2].imag / STEP
+        else:
+            st = _state(code, 0.0, kappa, loc, c, w, a_m, True)
+            r = st[2].real - d_fix
+        if not (st[6] and math.isfinite(r) and math.isfinite(dr)) or dr == 0:
+            return math.nan, False
+        step = -r / dr
+        size = abs(step) / (1.0 + abs(kappa))
+        kappa += step
+        if r == 0 or _stop(fresh, size, prev):
+            return kappa, lo <= kappa <= hi
+        fresh = not (size <= CHORD_RATE * prev)
+        prev = size
+    return math.nan, False
+
+
+@_jit
 def _pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
     """branches.solve_state under pressure control for one row: (x, kappa, status).
 
-    Unbracketed Newton on kappa for the gap; each iterate re-solves the unknown (from the last finite
-    inner solution) and carries its derivative through that solve by :func:`_propagate`; an iterate
-    without inner solution gives NaN and the Newton step backs off toward the last good kappa.
+    An implicit row with a finite predictor x0 is first solved by :func:`_joint_one`. Otherwise (or
+    when that fails): unbracketed Newton on kappa for the gap; each iterate re-solves the unknown
+    (from the last finite inner solution) and carries its derivative through that solve by
+    :func:`_propagate`; an iterate without inner solution gives NaN and the Newton step backs off
+    toward the last good kappa.
     """
     implicit = _implicit(code)
+    if implicit and has_x0 and math.isfinite(x0) and math.isfinite(kappa):
+        xj, kj, good = _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0)
+        if good:
+            return xj, kj, OK
     memo, has_memo = x0, has_x0 and math.isfinite(x0)
     last_good = kappa
     lc = complex(loc, 0.0)
@@ -838,8 +938,55 @@ def _mc_gap(kc, a, c, d_fix):
 
 
 @_jit
+def _mc_bracketed(a, c, d_fix, l, h):
+    """branches.mc_pressure for one row: bracketed Newton (solve.newton's rules) on the gap.
+
+    Returns (kappa, status): ``OK``, ``FAIL_BRACKET`` or ``FAIL_INNER``.
+    """
+    rlo = _mc_gap(complex(l, STEP), a, c, d_fix).real
+    rhi = _mc_gap(complex(h, STEP), a, c, d_fix).real
+    if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
+        return math.nan, FAIL_BRACKET
+    neg_at_lo = rlo < 0
+    x = min(max(0.5 * (l + h), min(l, h)), max(l, h))
+    for _ in range(MAXITER):
+        z = _mc_gap(complex(x, STEP), a, c, d_fix)
+        r, dr = z.real, z.imag / STEP
+        finite = math.isfinite(r) and math.isfinite(dr)
+        below = finite and ((r < 0) if neg_at_lo else (r > 0))
+        if below:
+            l = x
+        elif finite:
+            h = x
+        xn = x + (-r / dr) if (finite and dr != 0) else math.nan
+        inside = math.isfinite(xn) and min(l, h) <= xn <= max(l, h)
+        exact = finite and r == 0
+        if exact:
+            xn = x
+        elif not inside:
+            xn = 0.5 * (l + h)
+        tol = XTOL * (1.0 + abs(x))
+        done = exact or (inside and abs(xn - x) <= tol) or abs(h - l) <= tol
+        x = xn
+        if done:
+            return (x, OK) if finite else (math.nan, FAIL_INNER)
+    return math.nan, FAIL_INNER
+
+
+@_jit
+def _mc_from(a, c, d_fix, l, h, k0):
+    """One making-contact pressure from a predictor k0 (:func:`_gap_from`), accepted when it
+    converges inside [l, h], where the root is unique (d grows with kappa); otherwise
+    :func:`_mc_bracketed`."""
+    k, good = _gap_from(MC, a, c, 0.0, 0.0, d_fix, k0, min(l, h), max(l, h))
+    if good:
+        return k, OK
+    return _mc_bracketed(a, c, d_fix, l, h)
+
+
+@_jit
 def mc_pressure_batch(a, c, d_fix, lo, hi):
-    """branches.mc_pressure row by row: bracketed Newton (solve.newton's rules) on the gap.
+    """branches.mc_pressure row by row (:func:`_mc_bracketed`).
 
     Returns
     -------
@@ -851,39 +998,36 @@ def mc_pressure_batch(a, c, d_fix, lo, hi):
     ks = np.empty(n)
     status = np.zeros(n, dtype=np.int64)
     for i in range(n):
-        l, h = lo[i], hi[i]
-        rlo = _mc_gap(complex(l, STEP), a[i], c, d_fix).real
-        rhi = _mc_gap(complex(h, STEP), a[i], c, d_fix).real
-        if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
-            ks[i], status[i] = math.nan, FAIL_BRACKET
-            continue
-        neg_at_lo = rlo < 0
-        x = min(max(0.5 * (l + h), min(l, h)), max(l, h))
-        status[i] = FAIL_INNER
-        for _ in range(MAXITER):
-            z = _mc_gap(complex(x, STEP), a[i], c, d_fix)
-            r, dr = z.real, z.imag / STEP
-            finite = math.isfinite(r) and math.isfinite(dr)
-            below = finite and ((r < 0) if neg_at_lo else (r > 0))
-            if below:
-                l = x
-            elif finite:
-                h = x
-            xn = x + (-r / dr) if (finite and dr != 0) else math.nan
-            inside = math.isfinite(xn) and min(l, h) <= xn <= max(l, h)
-            exact = finite and r == 0
-            if exact:
-                xn = x
-            elif not inside:
-                xn = 0.5 * (l + h)
-            tol = XTOL * (1.0 + abs(x))
-            done = exact or (inside and abs(xn - x) <= tol) or abs(h - l) <= tol
-            x = xn
-            if done:
-                if finite:
-                    status[i] = OK
-                break
-        ks[i] = x if status[i] == OK else math.nan
+        ks[i], status[i] = _mc_bracketed(a[i], c, d_fix, lo[i], hi[i])
+    return ks, status
+
+
+@_jit
+def _extrapolate(s, v, i, fallback):
+    """Predictor of v at s[i] from rows i-3..i-1 (quadratic, Lagrange); ``fallback`` for i < 3."""
+    if i < 3:
+        return fallback
+    s0, s1, s2, z = s[i - 3], s[i - 2], s[i - 1], s[i]
+    if s0 == s1 or s1 == s2 or s0 == s2:
+        return fallback
+    return (v[i - 3] * (z - s1) * (z - s2) / ((s0 - s1) * (s0 - s2))
+            + v[i - 2] * (z - s0) * (z - s2) / ((s1 - s0) * (s1 - s2))
+            + v[i - 1] * (z - s0) * (z - s1) / ((s2 - s0) * (s2 - s1)))
+
+
+@_jit
+def _mc_pressure_rows(a, c, d_fix, lo, hi):
+    """mc_pressure_batch along a history's rows (ascending a): each row from a predictor
+    extrapolated from the rows before it (:func:`_mc_from`); the first rows bracketed."""
+    n = a.size
+    ks = np.empty(n)
+    status = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        k0 = _extrapolate(a, ks, i, ks[i - 1] if i > 0 else math.nan)
+        if math.isfinite(k0):
+            ks[i], status[i] = _mc_from(a[i], c, d_fix, lo[i], hi[i], k0)
+        else:
+            ks[i], status[i] = _mc_bracketed(a[i], c, d_fix, lo[i], hi[i])
     return ks, status
 
 
@@ -910,6 +1054,36 @@ def _all_good(status, ok, out):
 
 
 @_jit
+def _pressure_rows(code, locs, kg, xg, has_xg, c, w, a_m, L_m, d_fix):
+    """solve_observe_batch under pressure control along a history's rows, in order: from the fourth
+    row on, each row starts from a quadratic extrapolation of the three before it (a closer
+    predictor than ``kg, xg``, so the joint Newton needs fewer iterations)."""
+    n = locs.size
+    xs, ks = np.empty(n), np.empty(n)
+    status = np.zeros(n, dtype=np.int64)
+    out = np.full((7, n), math.nan)
+    ok = np.zeros(n, dtype=np.bool_)
+    implicit = _implicit(code)
+    bad = -1
+    for i in range(n):
+        k0 = _extrapolate(locs, ks, i, kg[i])
+        x0 = _extrapolate(locs, xs, i, xg[i]) if implicit else math.nan
+        done = False
+        if not implicit:
+            xs[i] = 0.0
+            ks[i], done = _gap_from(code, locs[i], c, w, a_m, d_fix, k0, -math.inf, math.inf)
+        if not done:
+            xs[i], ks[i], status[i] = _pressure_one(code, locs[i], c, w, a_m, L_m, d_fix, k0, x0,
+                                                    has_xg)
+        if status[i] != OK:
+            return xs, ks, status, out, ok, i
+        ok[i] = _observe(code, xs[i] if implicit else locs[i], ks[i], locs[i], c, w, a_m, out[:, i])
+        if bad < 0 and not _admissible(ok[i], out[:, i]):
+            bad = i
+    return xs, ks, status, out, ok, bad
+
+
+@_jit
 def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fix, l0, x0, k0,
             log):
     """loading._solve_rows with a start state: vectorised solve, else follow the branch through the rows.
@@ -917,9 +1091,12 @@ def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fi
     Returns (x, kappa, out, good): ``good`` False when the rows have a state outside the model.
     """
     n = locs.size
-    kin = kg.copy() if pressure else np.full(n, kappa_dc)
-    xs, ks, status, out, ok, bad = solve_observe_batch(code, pressure, locs, kin, xg, has_xg, c, w,
-                                                       a_m, L_m, d_fix)
+    if pressure:
+        xs, ks, status, out, ok, bad = _pressure_rows(code, locs, kg, xg, has_xg, c, w, a_m, L_m,
+                                                      d_fix)
+    else:
+        xs, ks, status, out, ok, bad = solve_observe_batch(code, False, locs, np.full(n, kappa_dc),
+                                                           xg, has_xg, c, w, a_m, L_m, d_fix)
     if _all_good(status, ok, out):
         return xs, ks, out, bad < 0
     st, n_out, ox, okp, _, _, _, _ = follow_kernel(code, pressure, l0, locs, x0, k0, c, w, a_m,
@@ -993,7 +1170,7 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
         hi = np.empty(n_mc)
         for i in range(n_mc):
             hi[i] = (1.0 + c * a_mc[i] * a_mc[i]) / (1.0 - a_mc[i] * a_mc[i]) * (1 - 1e-12)
-        k_mc, st_mc = mc_pressure_batch(a_mc, c, d_fix, np.full(n_mc, p_cr), hi)
+        k_mc, st_mc = _mc_pressure_rows(a_mc, c, d_fix, np.full(n_mc, p_cr), hi)
         for i in range(n_mc):
             if st_mc[i] != OK:
                 return fail

@@ -15,10 +15,12 @@ import numpy as np
 
 from ..errors import ConvergenceError
 
-__all__ = ["newton", "STEP"]
+__all__ = ["newton", "STEP", "XTOL"]
 
 #: Complex step. Any tiny value works: no subtraction is involved.
 STEP = 1e-30
+#: Newton converges when its step is below XTOL (1 + |x|)
+XTOL = 4e-15
 
 
 def _eval(residual, x):
@@ -28,7 +30,7 @@ def _eval(residual, x):
 
 
 def newton(residual: Callable[[np.ndarray], np.ndarray], x0, lo=None, hi=None, *,
-           xtol: float = 4e-15, maxiter: int = 60, what: str = "root solve",
+           xtol: float = XTOL, maxiter: int = 60, what: str = "root solve",
            inputs: dict | None = None, on_fail: str = "raise") -> np.ndarray:
     """Solve ``residual(x) = 0`` elementwise by Newton's method with a bisection safeguard.
 
