@@ -390,47 +390,52 @@ def _history_steps(v, c, pc, info):
     free = {"a": 0.0, "alpha": 0.0, "p": p0, "d": d_fix if pc else float(apex_deflection(p0)),
             "f": 0.0, "G": 0.0}
 
-    # 2. onset of delamination
-    on_branch, on_loc, on_x, on_k, path = _onset(slip, ctx, pc, kappa_m, d_fix)
-    onset = evaluate(on_branch, on_x, on_k, on_loc, ctx)
-    check_ok(onset, "onset of delamination", info)
-    a_on, k_on = (float(np.real(onset[k][0])) for k in ("a", "p"))
-
-    # 3. pinning, locator in (0, end]: G (no slip, ~alpha^2 near 0) or alpha (frictionless)
+    # 2. pinning, locator in (0, end]: G (no slip, ~alpha^2 near 0) or alpha (frictionless), dense
+    # toward the onset only (the start of pinning is the end of loading, and G ~ alpha^2 there). The
+    # rows are solved by continuation from the start of pinning (G = 0, t = 1, a = a_m) through every
+    # row: at fixed G the material condition can have a second root, and the physical state is the
+    # one connected to the start. The last row is the onset of delamination, G = w.
     pin = BRANCHES[("pinning", slip)]
     end = _pin_end(slip, ctx)
-    # dense toward the onset only: the start of pinning is the end of loading, and G ~ alpha^2 there
     lp = end * (u_pin * u_pin if slip == "no-slip" else u_pin)
-    k_guess = np.interp(lp, path[0], path[2])  # predictors from the continuation path
-    x_guess = np.interp(lp, path[0], path[1])
-    x_pin, k_pin, s_pin = _solve_rows(pin, lp, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
-                                      start=(path[0][0], path[1][0], path[2][0]))
-    _check(s_pin, "pinning", info)
+    (_, x_pin, k_pin), _ = _follow(pin, 0.0, lp, 1.0 if slip == "no-slip" else ctx.a_m, kappa_m,
+                                   ctx, d_fix if pc else None, log=False)
+    s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
+    onset = {k: v[-1:] for k, v in s_pin.items()}
+    on_x = x_pin[-1:]
+    check_ok(onset, "onset of delamination", info)
+    check_ok(s_pin, "pinning", info)
+    a_on, k_on = (float(np.real(onset[k][0])) for k in ("a", "p"))
 
-    # 4. delamination, a from a_on toward detachment (denser toward its end). No slip: the branch can
-    # end at a finite radius, where the stretch-mismatch part of G, (t - 1)^2 / 2, alone reaches w
-    # (alpha -> 0); no state with G = w exists beyond it and detachment from there is dynamic.
+    # 3. delamination, a from a_on toward detachment (denser toward its end), by continuation from
+    # the onset through every row. No slip: the branch can end at a finite radius, where the
+    # stretch-mismatch part of G, (t - 1)^2 / 2, alone reaches w (alpha -> 0); no state with G = w
+    # exists beyond it and detachment from there is dynamic. The rows are then spread up to that end.
     dl = BRANCHES[("delamination", slip)]
     a_end = _detachment_end(ctx, k_on)
-    x_guess, k_guess, dpath, branch_end = None, None, None, None
-    if pc or dl.target is not None:  # explicit in displacement control when frictionless
-        x_start = None if dl.target is None else _delamination_start(slip, on_x, onset)
-        reached, dpath = _follow(dl, a_on, np.array([a_end]), x_start, k_on, ctx,
-                                 d_fix if pc else None, log=True, allow_end=slip == "no-slip")
-        if reached[0].size == 0:
-            branch_end = float(dpath[0][-1])
-            a_end = branch_end
     a_dl = a_end + (a_on - a_end) * u_dl
-    k_guess = np.full(a_dl.shape, k_on)
-    if dpath is not None:
-        order = np.argsort(dpath[0])
-        k_guess = np.interp(a_dl, dpath[0][order], dpath[2][order])
-        if dl.target is not None:
-            x_guess = np.interp(a_dl, dpath[0][order], dpath[1][order])
-            x_guess[-1] = dpath[1][-1] if branch_end is not None else x_guess[-1]
-    x_dl, k_dl, s_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
-                                   start=(a_on, None if dl.target is None else
-                                          _delamination_start(slip, on_x, onset), k_on))
+    branch_end = None
+    x_start = None if dl.target is None else _delamination_start(slip, on_x, onset)
+    if not pc and dl.target is None:  # explicit in displacement control when frictionless
+        x_dl, k_dl, s_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, None)
+    else:
+        reached, dpath = _follow(dl, a_on, a_dl, x_start, k_on, ctx, d_fix if pc else None,
+                                 log=True, allow_end=slip == "no-slip")
+        if reached[0].size == a_dl.size:
+            x_dl = None if dl.target is None else reached[1]
+            k_dl = reached[2]
+            s_dl = evaluate(dl, x_dl, k_dl, a_dl, ctx)
+        else:
+            branch_end = a_end = float(dpath[0][-1])
+            a_dl = a_end + (a_on - a_end) * u_dl
+            order = np.argsort(dpath[0])
+            k_guess = np.interp(a_dl, dpath[0][order], dpath[2][order])
+            x_guess = None
+            if dl.target is not None:
+                x_guess = np.interp(a_dl, dpath[0][order], dpath[1][order])
+                x_guess[-1] = dpath[1][-1]
+            x_dl, k_dl, s_dl = _solve_rows(dl, a_dl, ctx, pc, kappa_dc, d_fix, k_guess, x_guess,
+                                           start=(a_on, x_start, k_on))
     _check(s_dl, "delamination", info)
 
     stages = {"pinning": (pin, lp, s_pin, x_pin), "delamination": (dl, a_dl, s_dl, x_dl)}

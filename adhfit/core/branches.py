@@ -223,22 +223,30 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
         kappa = np.broadcast_to(np.asarray(kappa, float), loc.shape)
         return solve_unknown(branch, kappa, loc, ctx, x0), kappa
     k0 = np.broadcast_to(np.asarray(kappa0, float), loc.shape)
-    if branch.target is None or x0 is None:
+    if branch.target is not None and x0 is None:
         return _solve_nested(branch, loc, ctx, d_fix, k0, x0)
-    x0 = np.broadcast_to(np.asarray(x0, float), loc.shape)
-    x, kappa, good = _joint_newton(branch, loc, ctx, d_fix, k0, x0)
+    if branch.target is not None:
+        x0 = np.broadcast_to(np.asarray(x0, float), loc.shape)
+        x, kappa, good = _joint_newton(branch, loc, ctx, d_fix, k0, x0)
+    else:
+        x0, x = None, None
+        kappa, good = _gap_newton(branch, loc, ctx, d_fix, k0)
     if np.all(good):
         return x, kappa
     rest = ~good
     try:
-        xr, kr = _solve_nested(branch, loc[rest], ctx, d_fix, k0[rest], x0[rest])
+        xr, kr = _solve_nested(branch, loc[rest], ctx, d_fix, k0[rest],
+                               None if x0 is None else x0[rest])
     except ConvergenceError as err:  # name the row of the whole array
         if "index" not in err.inputs:
             raise
         index = int(np.flatnonzero(rest.ravel())[err.inputs["index"]])
         raise ConvergenceError(err.what, {**err.inputs, "index": index}) from None
-    x, kappa = x.copy(), kappa.copy()
-    x[rest], kappa[rest] = xr, kr
+    kappa = kappa.copy()
+    kappa[rest] = kr
+    if x is not None:
+        x = x.copy()
+        x[rest] = xr
     return x, kappa
 
 
@@ -308,6 +316,38 @@ def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
     lo, hi = branch.bracket(k, loc, ctx)
     inside = (x >= np.minimum(lo, hi)) & (x <= np.maximum(lo, hi))
     return x, k, alive & done & inside
+
+
+def _gap_newton(branch, loc, ctx, d_fix, k0):
+    """Pressure control on an explicit branch: kappa for the gap from predictors, Newton with chord
+    steps and the stopping rule of :func:`_joint_newton`; (kappa, good)."""
+    k = np.array(k0, float)
+    alive = np.isfinite(k)
+    done = np.zeros(loc.shape, bool)
+    fresh = np.ones(loc.shape, bool)
+    prev = np.full(loc.shape, np.inf)
+    dr = np.zeros(loc.shape)
+    with np.errstate(all="ignore"):
+        for _ in range(JOINT_MAXITER):
+            run = alive & ~done
+            if not run.any():
+                break
+            e1 = evaluate(branch, None, k + 1j * STEP, loc, ctx)
+            e0 = evaluate(branch, None, k, loc, ctx)
+            dr = np.where(fresh, np.imag(e1["d"]) / STEP, dr)
+            r = np.where(fresh, np.real(e1["d"]), e0["d"]) - d_fix
+            ok = np.where(fresh, e1["ok"], e0["ok"])
+            fine = ok & np.isfinite(r) & np.isfinite(dr) & (dr != 0)
+            alive &= fine | done
+            run &= fine
+            step = np.where(r == 0, 0.0, -r / dr)
+            size = np.abs(step) / (1.0 + np.abs(k))
+            small = np.where(fresh, size <= JOINT_STOP, size * np.minimum(1.0, size / prev) <= XTOL)
+            k = np.where(run, k + step, k)
+            done |= run & ((r == 0) | small)
+            fresh = np.where(run, ~(size <= CHORD_RATE * prev), fresh)
+            prev = np.where(run, size, prev)
+    return k, alive & done
 
 
 def _solve_nested(branch, loc, ctx, d_fix, k0, x0):

@@ -496,17 +496,21 @@ def _gap_from(code, loc, c, w, a_m, d_fix, kappa, lo, hi):
 def _pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
     """branches.solve_state under pressure control for one row: (x, kappa, status).
 
-    An implicit row with a finite predictor x0 is first solved by :func:`_joint_one`. Otherwise (or
-    when that fails): unbracketed Newton on kappa for the gap; each iterate re-solves the unknown
-    (from the last finite inner solution) and carries its derivative through that solve by
-    :func:`_propagate`; an iterate without inner solution gives NaN and the Newton step backs off
-    toward the last good kappa.
+    An implicit row with a finite predictor x0 is first solved by :func:`_joint_one`, an explicit
+    row by :func:`_gap_from`. Otherwise (or when that fails): unbracketed Newton on kappa for the
+    gap; each iterate re-solves the unknown (from the last finite inner solution) and carries its
+    derivative through that solve by :func:`_propagate`; an iterate without inner solution gives
+    NaN and the Newton step backs off toward the last good kappa.
     """
     implicit = _implicit(code)
     if implicit and has_x0 and math.isfinite(x0) and math.isfinite(kappa):
         xj, kj, good = _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0)
         if good:
             return xj, kj, OK
+    if not implicit and math.isfinite(kappa):
+        kj, good = _gap_from(code, loc, c, w, a_m, d_fix, kappa, -math.inf, math.inf)
+        if good:
+            return 0.0, kj, OK
     memo, has_memo = x0, has_x0 and math.isfinite(x0)
     last_good = kappa
     lc = complex(loc, 0.0)
@@ -665,6 +669,8 @@ def first_bad(ok, a, alpha, p, d, f, G):
 # stale copies of the functions here after they change.
 
 F_OK, F_STALLED, F_STEPS = 0, 1, 2
+#: continuation.GAP_CLOSE
+GAP_CLOSE = 1e-12
 E_OK, E_SOLVE, E_SEARCH, E_NOCONV = 0, 1, 2, 3
 #: rows of an observation vector (as in compiled.evaluate_batch)
 KEY_CODES = {"a": 0, "alpha": 1, "p": 2, "d": 3, "f": 4, "G": 5, "J0": 6}
@@ -695,6 +701,23 @@ def _admissible(ok, out):
         if not math.isfinite(out[j]):
             return False
     return True
+
+
+@_jit
+def _predict(ss, xs, ks, m, s):
+    """continuation._predict: x, kappa at s extrapolated from the last accepted states (quadratic
+    through three, linear through two, else the last one)."""
+    if m > 2 and ss[m - 3] != ss[m - 2] and ss[m - 2] != ss[m - 1] and ss[m - 3] != ss[m - 1]:
+        s0, s1, s2 = ss[m - 3], ss[m - 2], ss[m - 1]
+        l0 = (s - s1) * (s - s2) / ((s0 - s1) * (s0 - s2))
+        l1 = (s - s0) * (s - s2) / ((s1 - s0) * (s1 - s2))
+        l2 = (s - s0) * (s - s1) / ((s2 - s0) * (s2 - s1))
+        return (l0 * xs[m - 3] + l1 * xs[m - 2] + l2 * xs[m - 1],
+                l0 * ks[m - 3] + l1 * ks[m - 2] + l2 * ks[m - 1])
+    if m > 1 and ss[m - 1] != ss[m - 2]:
+        r = (s - ss[m - 1]) / (ss[m - 1] - ss[m - 2])
+        return xs[m - 1] + r * (xs[m - 1] - xs[m - 2]), ks[m - 1] + r * (ks[m - 1] - ks[m - 2])
+    return xs[m - 1], ks[m - 1]
 
 
 @_jit
@@ -738,12 +761,11 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
             break
         goal = math.log(targets[i]) if log else targets[i]
         gap = goal - ss[m - 1]
-        s_new = goal if abs(gap) <= h else ss[m - 1] + math.copysign(h, gap)
-        if m > 1 and ss[m - 1] != ss[m - 2]:
-            r = (s_new - ss[m - 1]) / (ss[m - 1] - ss[m - 2])
-            xg, kg = xs[m - 1] + r * (xs[m - 1] - xs[m - 2]), ks[m - 1] + r * (ks[m - 1] - ks[m - 2])
-        else:
-            xg, kg = xs[m - 1], ks[m - 1]
+        # a gap within rounding of the goal is closed in one step (a step below the spacing of
+        # floats would not move)
+        near = abs(gap) <= h or abs(gap) <= GAP_CLOSE * (1.0 + abs(goal))
+        s_new = goal if near else ss[m - 1] + math.copysign(h, gap)
+        xg, kg = _predict(ss, xs, ks, m, s_new)
         loc = math.exp(s_new) if log else s_new
         x, k, st = _solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix)
         good = st == 0
@@ -1054,36 +1076,6 @@ def _all_good(status, ok, out):
 
 
 @_jit
-def _pressure_rows(code, locs, kg, xg, has_xg, c, w, a_m, L_m, d_fix):
-    """solve_observe_batch under pressure control along a history's rows, in order: from the fourth
-    row on, each row starts from a quadratic extrapolation of the three before it (a closer
-    predictor than ``kg, xg``, so the joint Newton needs fewer iterations)."""
-    n = locs.size
-    xs, ks = np.empty(n), np.empty(n)
-    status = np.zeros(n, dtype=np.int64)
-    out = np.full((7, n), math.nan)
-    ok = np.zeros(n, dtype=np.bool_)
-    implicit = _implicit(code)
-    bad = -1
-    for i in range(n):
-        k0 = _extrapolate(locs, ks, i, kg[i])
-        x0 = _extrapolate(locs, xs, i, xg[i]) if implicit else math.nan
-        done = False
-        if not implicit:
-            xs[i] = 0.0
-            ks[i], done = _gap_from(code, locs[i], c, w, a_m, d_fix, k0, -math.inf, math.inf)
-        if not done:
-            xs[i], ks[i], status[i] = _pressure_one(code, locs[i], c, w, a_m, L_m, d_fix, k0, x0,
-                                                    has_xg)
-        if status[i] != OK:
-            return xs, ks, status, out, ok, i
-        ok[i] = _observe(code, xs[i] if implicit else locs[i], ks[i], locs[i], c, w, a_m, out[:, i])
-        if bad < 0 and not _admissible(ok[i], out[:, i]):
-            bad = i
-    return xs, ks, status, out, ok, bad
-
-
-@_jit
 def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fix, l0, x0, k0,
             log):
     """loading._solve_rows with a start state: vectorised solve, else follow the branch through the rows.
@@ -1091,12 +1083,9 @@ def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fi
     Returns (x, kappa, out, good): ``good`` False when the rows have a state outside the model.
     """
     n = locs.size
-    if pressure:
-        xs, ks, status, out, ok, bad = _pressure_rows(code, locs, kg, xg, has_xg, c, w, a_m, L_m,
-                                                      d_fix)
-    else:
-        xs, ks, status, out, ok, bad = solve_observe_batch(code, False, locs, np.full(n, kappa_dc),
-                                                           xg, has_xg, c, w, a_m, L_m, d_fix)
+    kin = kg.copy() if pressure else np.full(n, kappa_dc)
+    xs, ks, status, out, ok, bad = solve_observe_batch(code, pressure, locs, kin, xg, has_xg, c, w,
+                                                       a_m, L_m, d_fix)
     if _all_good(status, ok, out):
         return xs, ks, out, bad < 0
     st, n_out, ox, okp, _, _, _, _ = follow_kernel(code, pressure, l0, locs, x0, k0, c, w, a_m,
@@ -1181,59 +1170,60 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
         return fail
     a_m, L_m, kappa_m = a_max, out_mc[6, n_mc - 1], k_mc[n_mc - 1]
 
-    # 2. onset: follow pinning from its start (G = 0 / alpha = 0) to G = w / alpha = atan sqrt(2w)
+    # 2. pinning rows by continuation from its start (G = 0 / alpha = 0) through every row; the last
+    # row is the onset (G = w / alpha = atan sqrt(2w))
     end = w if no_slip else math.atan(math.sqrt(2.0 * w))
-    st, _, _, _, pl, px, pk, _ = follow_kernel(pin_code, pressure, 0.0, np.array([end]),
-                                               1.0 if no_slip else a_m, kappa_m, c, w, a_m, L_m,
-                                               d_fix, False, 2000, False)
-    if st != F_OK:
-        return fail
-    on_x, on_k = px[px.size - 1], pk[pk.size - 1]
-    onset = np.empty(7)
-    if not _admissible(_observe(pin_code, on_x, on_k, end, c, w, a_m, onset), onset):
-        return fail
-    a_on, k_on = onset[0], onset[2]
-
-    # 3. pinning rows, predictors from the path
     n_pin = u_pin.size
     lp = end * (u_pin * u_pin if no_slip else u_pin)
-    kg = np.interp(lp, pl, pk)
-    xg = np.interp(lp, pl, px)
-    x_pin, k_pin, out_pin, good = _rows_k(pin_code, pressure, lp, kappa_dc, kg, xg, True, c, w,
-                                          a_m, L_m, d_fix, pl[0], px[0], pk[0], False)
-    if not good:
+    st, n_out, x_pin, k_pin, _, _, _, _ = follow_kernel(pin_code, pressure, 0.0, lp,
+                                                        1.0 if no_slip else a_m, kappa_m, c, w,
+                                                        a_m, L_m, d_fix, False, 2000, False)
+    if st != F_OK or n_out != n_pin:
         return fail
+    out_pin, ok_pin = evaluate_batch(pin_code, x_pin, k_pin, lp, c, w, a_m)
+    if first_bad(ok_pin, out_pin[0], out_pin[1], out_pin[2], out_pin[3], out_pin[4],
+                 out_pin[5]) >= 0:
+        return fail
+    onset = out_pin[:, n_pin - 1].copy()
+    on_x = x_pin[n_pin - 1]
+    a_on, k_on = onset[0], onset[2]
 
-    # 4. delamination, a from a_on toward detachment
+    # 3. delamination, a from a_on toward detachment, by continuation through every row
     pull_off = math.sqrt(2.0 * w) / (2.0 * (abs(k_on) + c + 1.0))
     a_end = min(a_end_rel * a_m, 0.1 * pull_off)
     x_start = on_x if no_slip else math.nan
     branch_end = math.nan
     n_dl = u_dl.size
-    has_path = pressure or dl_implicit
-    dl_l, dl_x, dl_k = np.empty(0), np.empty(0), np.empty(0)
-    if has_path:
-        st, n_out, _, _, dl_l, dl_x, dl_k, _ = follow_kernel(
-            dl_code, pressure, a_on, np.array([a_end]), x_start, k_on, c, w, a_m, L_m, d_fix,
-            True, 2000, no_slip)
+    a_dl = a_end + (a_on - a_end) * u_dl
+    if not (pressure or dl_implicit):  # explicit in displacement control when frictionless
+        x_dl = a_dl.copy()
+        out_dl, ok_dl = evaluate_batch(dl_code, a_dl, np.full(n_dl, kappa_dc), a_dl, c, w, a_m)
+        good = first_bad(ok_dl, out_dl[0], out_dl[1], out_dl[2], out_dl[3], out_dl[4],
+                         out_dl[5]) < 0
+    else:
+        st, n_out, x_dl, k_dl, dl_l, dl_x, dl_k, _ = follow_kernel(
+            dl_code, pressure, a_on, a_dl, x_start, k_on, c, w, a_m, L_m, d_fix, True, 2000,
+            no_slip)
         if st != F_OK:
             return fail
-        if n_out == 0:
-            branch_end = dl_l[dl_l.size - 1]
-            a_end = branch_end
-    a_dl = a_end + (a_on - a_end) * u_dl
-    kg = np.full(n_dl, k_on)
-    xg = a_dl.copy()
-    if has_path:
-        # the path runs from a_on down: reversed, its locators ascend (np.interp needs that)
-        rl, rxp, rkp = dl_l[::-1].copy(), dl_x[::-1].copy(), dl_k[::-1].copy()
-        kg = np.interp(a_dl, rl, rkp)
-        if dl_implicit:
-            xg = np.interp(a_dl, rl, rxp)
-            if not math.isnan(branch_end):
+        if n_out == n_dl:
+            out_dl, ok_dl = evaluate_batch(dl_code, x_dl if dl_implicit else a_dl, k_dl, a_dl, c,
+                                           w, a_m)
+            good = first_bad(ok_dl, out_dl[0], out_dl[1], out_dl[2], out_dl[3], out_dl[4],
+                             out_dl[5]) < 0
+        else:
+            # the branch ends before a_end: rows up to its end, predictors from the path
+            branch_end = a_end = dl_l[dl_l.size - 1]
+            a_dl = a_end + (a_on - a_end) * u_dl
+            rl, rxp, rkp = dl_l[::-1].copy(), dl_x[::-1].copy(), dl_k[::-1].copy()
+            kg = np.interp(a_dl, rl, rkp)
+            xg = a_dl.copy()
+            if dl_implicit:
+                xg = np.interp(a_dl, rl, rxp)
                 xg[n_dl - 1] = dl_x[dl_x.size - 1]
-    x_dl, k_dl, out_dl, good = _rows_k(dl_code, pressure, a_dl, kappa_dc, kg, xg, dl_implicit, c,
-                                       w, a_m, L_m, d_fix, a_on, x_start, k_on, True)
+            x_dl, k_dl, out_dl, good = _rows_k(dl_code, pressure, a_dl, kappa_dc, kg, xg,
+                                               dl_implicit, c, w, a_m, L_m, d_fix, a_on, x_start,
+                                               k_on, True)
     if not good:
         return fail
 

@@ -5,7 +5,7 @@ top of :mod:`.branches` (the readable reference); :mod:`.compiled` runs the same
 kernel calls (``follow_kernel``, ``extremum_kernel``) and :mod:`.backend` dispatches between them.
 
 * :func:`follow` walks a branch from a solved state to target locators with step control (the
-  predictor for every solve is a linear extrapolation of the last two accepted states).
+  predictor for every solve is a quadratic extrapolation of the last three accepted states).
 * :func:`extremum` locates where an observable (or kappa) is extremal between two locators: the root
   of its exact complex-step derivative along the branch (scipy ``brentq``), compared with the ends;
   only admissible states compete.
@@ -29,6 +29,8 @@ KEYS = ("a", "alpha", "p", "d", "f", "G")
 BRENT_XTOL = 1e-15
 BRENT_RTOL = 4 * np.finfo(float).eps
 BRENT_MAXITER = 200
+#: follow closes a remaining gap below GAP_CLOSE (1 + |goal|) in one step
+GAP_CLOSE = 1e-12
 
 
 def _solve_one(branch, loc, ctx, d_fix, k, xg):
@@ -39,6 +41,21 @@ def _solve_one(branch, loc, ctx, d_fix, k, xg):
     return solve_state(branch, np.array([loc]), ctx, d_fix=d_fix, kappa0=np.array([k]), x0=x0)
 
 
+def _predict(ss, xs, ks, s):
+    """x, kappa at s extrapolated from the accepted states: quadratic (Lagrange) through the last
+    three, linear through the last two, else the last one."""
+    if len(ss) > 2 and len({ss[-3], ss[-2], ss[-1]}) == 3:
+        s0, s1, s2 = ss[-3:]
+        l0 = (s - s1) * (s - s2) / ((s0 - s1) * (s0 - s2))
+        l1 = (s - s0) * (s - s2) / ((s1 - s0) * (s1 - s2))
+        l2 = (s - s0) * (s - s1) / ((s2 - s0) * (s2 - s1))
+        return (l0 * xs[-3] + l1 * xs[-2] + l2 * xs[-1], l0 * ks[-3] + l1 * ks[-2] + l2 * ks[-1])
+    if len(ss) > 1 and ss[-1] != ss[-2]:
+        r = (s - ss[-1]) / (ss[-1] - ss[-2])
+        return xs[-1] + r * (xs[-1] - xs[-2]), ks[-1] + r * (ks[-1] - ks[-2])
+    return xs[-1], ks[-1]
+
+
 def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: bool,
            max_steps: int = 2000, allow_end: bool = False):
     """Follow a branch from locator l0 (solved: x0, k0) through ``targets`` (continuation).
@@ -46,8 +63,9 @@ def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: boo
     ``d_fix`` None means displacement control (kappa fixed at k0); else kappa is solved from the gap.
 
     Steps are taken in the locator (``log=False``) or in its logarithm (``log=True``, for the contact
-    radius on the way to detachment) and land exactly on every target; each state starts from a linear
-    extrapolation of the last two; a failed or out-of-domain step is halved.
+    radius on the way to detachment) and land exactly on every target; each state starts from a
+    quadratic extrapolation of the last three (:func:`_predict`); a failed or out-of-domain step is
+    halved.
 
     ``allow_end``: where the branch itself ends before the last target (no-slip delamination can),
     return the path up to its end (located to ~1e-10 of the span) instead of raising; the targets not
@@ -79,12 +97,11 @@ def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: boo
                                    {"locator": float(back(ss[-1])), "d": d_fix, "w": ctx.w})
         goal = fwd(targets[i])
         gap_ = goal - ss[-1]
-        s_new = goal if abs(gap_) <= h else ss[-1] + np.sign(gap_) * h
-        if len(ss) > 1 and ss[-1] != ss[-2]:
-            r = (s_new - ss[-1]) / (ss[-1] - ss[-2])
-            xg, kg = xs[-1] + r * (xs[-1] - xs[-2]), ks[-1] + r * (ks[-1] - ks[-2])
-        else:
-            xg, kg = xs[-1], ks[-1]
+        # a gap within rounding of the goal is closed in one step (a step below the spacing of
+        # floats would not move)
+        near = abs(gap_) <= h or abs(gap_) <= GAP_CLOSE * (1.0 + abs(goal))
+        s_new = goal if near else ss[-1] + np.sign(gap_) * h
+        xg, kg = _predict(ss, xs, ks, s_new)
         loc = back(s_new)
         try:
             x, k = _solve_one(branch, loc, ctx, d_fix, k0 if d_fix is None else kg, xg)
