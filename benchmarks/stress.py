@@ -4,20 +4,27 @@ Draws scenes from the parameter table (``adhfit.params.DIMENSIONLESS`` bounds, `
 cross constraints) with an explicitly seeded ``numpy.random.Generator``, runs each one with
 ``points=50`` in one of two worker processes under a per-scene timeout, and counts
 
-    success | input_error | convergence_error | other_exception | nan_in_output | invariant_violation
-    | timeout
+    success | success_branch_ends_early | input_error | convergence_error | other_exception
+    | nan_in_output | invariant_violation | timeout
 
-``nan_in_output``: a NaN/inf in the frame (``delta`` may be empty only where |p| > 1, A2) or in the
-summary.  ``invariant_violation``: finite output that breaks a contract every history must meet (stage
-order, 0 <= G <= w, ``stable`` true then false, ``f_max`` = force at the end of loading, ``f_min`` <=
-every pinning/delamination row's f, last row near detachment: a <= 1e-2 a_max).  A hung scene is killed and counted as ``timeout``, not fatal.
+``nan_in_output``: a NaN/inf in the frame (``delta`` may be empty only where |p| > 1, A2), in the
+summary or in ``inputs["delamination_ends_at_a"]``.  ``invariant_violation``: finite output that breaks a
+contract every history must meet (stage order, 0 <= G <= w, ``stable`` true then false, ``f_max`` =
+force at the end of loading, ``f_min`` <= every pinning/delamination row's f, last row near
+detachment: a <= 1e-2 a_max).  ``success_branch_ends_early``: a no-slip history whose quasi-static
+delamination branch ends at a finite contact radius (weak adhesion; detachment from there is dynamic,
+README "Weak adhesion with no slip").  The engine records that radius in
+``inputs["delamination_ends_at_a"]``; such a history passes every other check, and instead of "near
+detachment" its last row must be a delamination row at exactly that radius, 0 < radius <= the onset
+radius (a frictionless history must not record one).  The report gives their count and the distribution of
+``delamination_ends_at_a / a_max``.  A hung scene is killed and counted as ``timeout``, not fatal.
 
 Usage::
 
     python benchmarks/stress.py --n 10000 --seed 20240601 [--timeout 60] [--workers 2]
 
-Writes ``benchmarks/results/stress.json`` (counts, timing, the first 50 failing inputs of each kind)
-and ``benchmarks/results/stress.md``.
+Writes ``stress.json`` (counts, timing, the first 50 failing inputs of each kind) and ``stress.md`` to
+``--out`` (default ``benchmarks/results``).
 """
 from __future__ import annotations
 
@@ -44,8 +51,12 @@ from adhfit.errors import InputError  # noqa: E402
 from adhfit.params import DIMENSIONLESS as T, check_scene  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
-KINDS = ("success", "input_error", "convergence_error", "other_exception", "nan_in_output",
+EARLY = "success_branch_ends_early"
+KINDS = ("success", EARLY, "input_error", "convergence_error", "other_exception", "nan_in_output",
          "invariant_violation", "timeout")
+SUCCESS = ("success", EARLY)
+LABELS = {EARLY: "success (delamination branch ends early)"}
+ENDS_AT = "delamination_ends_at_a"
 KEEP = 50
 POINTS = 50
 
@@ -144,7 +155,92 @@ def _summary_nonfinite(summary: dict, prefix: str = "") -> list[str]:
     return bad
 
 
-def _invariants(frame, summary: dict, w: float) -> list[str]:
+def _ends_at(inputs: dict) -> tuple[float | None, list[str]]:
+    """The radius where the no-slip delamination branch ends early, if the engine recorded one.
+
+    Parameters
+    ----------
+    inputs : dict
+        ``SimulationResult.inputs``.
+
+    Returns
+    -------
+    ends_at : float or None
+        ``inputs["delamination_ends_at_a"]`` (None: not recorded, the history runs on toward a -> 0).
+    bad : list of str
+        A message when the recorded value is not a finite number (counted as ``nan_in_output``).
+    """
+    v = inputs.get(ENDS_AT)
+    if v is None:
+        return None, []
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
+            or not math.isfinite(float(v)):
+        return None, [f"inputs.{ENDS_AT} = {v!r}"]
+    return float(v), []
+
+
+def _early_end(frame, summary: dict, a_max: float, ends_at: float, slip: str) -> list[str]:
+    """Contracts of a history whose quasi-static delamination branch ends early (at ``ends_at``).
+
+    Only no slip can end early; the radius lies in (0, onset radius] (delamination runs from the onset
+    toward a -> 0) and the history stops on a delamination row at exactly that radius.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``SimulationResult.frame``.
+    summary : dict
+        ``SimulationResult.summary``.
+    a_max : float
+        Contact radius at the end of loading.
+    ends_at : float
+        ``inputs["delamination_ends_at_a"]``.
+    slip : str
+        The scene's interface condition.
+
+    Returns
+    -------
+    list of str
+        One message per broken contract (empty: all met).
+    """
+    bad = []
+    if slip != "no-slip":
+        bad.append(f"{ENDS_AT} = {ends_at:.6g} recorded for a {slip} history (only no slip ends early)")
+    a_on = (summary.get("onset") or {}).get("a")
+    a_on = a_on if isinstance(a_on, float) else a_max
+    if not 0.0 < ends_at <= a_on + 1e-12 * a_max:
+        bad.append(f"{ENDS_AT} = {ends_at:.6g} outside (0, onset a = {a_on:.6g}]")
+    last_stage, a_last = str(frame["stage"].iloc[-1]), float(frame["a"].iloc[-1])
+    if last_stage != "delamination":
+        bad.append(f"branch ends early at a = {ends_at:.6g} but the last row is a {last_stage} row")
+    if abs(a_last - ends_at) > 1e-9 * max(a_max, abs(ends_at)):
+        bad.append(f"history stops at a = {a_last:.10g}, not at {ENDS_AT} = {ends_at:.10g}")
+    return bad
+
+
+def _invariants(frame, summary: dict, w: float, ends_at: float | None = None,
+                slip: str = "no-slip") -> list[str]:
+    """Contracts every finite history must meet (see the module docstring).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``SimulationResult.frame``.
+    summary : dict
+        ``SimulationResult.summary``.
+    w : float
+        The scene's W_ad/(mu h).
+    ends_at : float or None
+        ``inputs["delamination_ends_at_a"]`` when the engine recorded it: the last row must then be a
+        delamination row at that radius (:func:`_early_end`) instead of near detachment.
+    slip : str
+        The scene's interface condition.
+
+    Returns
+    -------
+    list of str
+        One message per broken contract (empty: all met).
+    """
     bad = []
     order = {"making_contact": 0, "pinning": 1, "delamination": 2}
     st = [order.get(s, -1) for s in frame["stage"]]
@@ -167,10 +263,42 @@ def _invariants(frame, summary: dict, w: float) -> list[str]:
         bad.append(f"f_min {fmin!r} above the least pinning/delamination row force {back.min()!r}")
     a = frame["a"].to_numpy(dtype=float)
     a_max = a[mk[-1]] if mk.size else a.max()
-    if a[-1] > 1e-2 * a_max:
+    if ends_at is not None:
+        bad += _early_end(frame, summary, a_max, ends_at, slip)
+    elif a[-1] > 1e-2 * a_max:
         bad.append(f"history stops at a = {a[-1]:.6g} ({a[-1] / a_max:.3g} a_max) with f = {f[-1]:.6g}, "
                    "not near detachment (A2: run on toward a <= 1e-3 a_max)")
     return bad
+
+
+def classify(frame, summary: dict, inputs: dict, scene: dict) -> dict:
+    """Kind of a history the engine returned (without the timing).
+
+    Parameters
+    ----------
+    frame, summary, inputs
+        ``SimulationResult.frame``, ``.summary`` and ``.inputs``.
+    scene : dict
+        The keyword arguments it was run with (``w`` and ``slip`` are used).
+
+    Returns
+    -------
+    dict
+        ``kind`` (``nan_in_output``, ``invariant_violation``, ``success_branch_ends_early`` or
+        ``success``), ``rows``, and ``detail`` (failures) or ``ends_at_over_a_max`` (early end).
+    """
+    ends_at, bad = _ends_at(inputs)
+    bad = _nonfinite(frame) + _summary_nonfinite(summary) + bad
+    if bad:
+        return {"kind": "nan_in_output", "detail": "; ".join(bad), "rows": len(frame)}
+    bad = _invariants(frame, summary, scene["w"], ends_at, scene["slip"])
+    if bad:
+        return {"kind": "invariant_violation", "detail": "; ".join(bad), "rows": len(frame)}
+    if ends_at is None:
+        return {"kind": "success", "rows": len(frame)}
+    mk = np.flatnonzero(frame["stage"].to_numpy() == "making_contact")
+    a_max = float(frame["a"].iloc[mk[-1]]) if mk.size else float(frame["a"].max())
+    return {"kind": EARLY, "rows": len(frame), "ends_at_over_a_max": ends_at / a_max}
 
 
 def run_one(scene: dict) -> dict:
@@ -189,14 +317,7 @@ def run_one(scene: dict) -> dict:
         tb = traceback.extract_tb(e.__traceback__)[-1]
         return _outcome("other_exception", t0, f"{type(e).__name__}: {e} [{tb.filename}:{tb.lineno}]")
     elapsed = time.perf_counter() - t0
-    frame, summary = res.frame, res.summary
-    bad = _nonfinite(frame) + _summary_nonfinite(summary)
-    if bad:
-        return {"kind": "nan_in_output", "time": elapsed, "detail": "; ".join(bad), "rows": len(frame)}
-    bad = _invariants(frame, summary, scene["w"])
-    if bad:
-        return {"kind": "invariant_violation", "time": elapsed, "detail": "; ".join(bad), "rows": len(frame)}
-    return {"kind": "success", "time": elapsed, "rows": len(frame)}
+    return {**classify(res.frame, res.summary, res.inputs, scene), "time": elapsed}
 
 
 def _baseline_scene(scene: dict) -> tuple[str, str, dict]:
@@ -342,9 +463,9 @@ def summarize(scenes: list[dict], outcomes: list[dict], args: argparse.Namespace
         flat = "flat" if math.isinf(sc["rs"]) else "curved"
         key = f"{sc['control']} / {sc['slip']} / {flat} / {end}"
         by_group.setdefault(key, Counter())[o["kind"]] += 1
-    failures: dict[str, list] = {k: [] for k in KINDS if k != "success"}
+    failures: dict[str, list] = {k: [] for k in KINDS if k not in SUCCESS}
     for i, (sc, o) in enumerate(zip(scenes, outcomes)):
-        if o["kind"] != "success" and len(failures[o["kind"]]) < KEEP:
+        if o["kind"] not in SUCCESS and len(failures[o["kind"]]) < KEEP:
             failures[o["kind"]].append({"index": i, "scene": _jsonable(sc), "detail": o.get("detail"),
                                         "time_s": round(o["time"], 4)})
     return {
@@ -356,8 +477,33 @@ def summarize(scenes: list[dict], outcomes: list[dict], args: argparse.Namespace
         "time_per_scene_s": {"median": float(np.median(times)), "p95": float(np.percentile(times, 95)),
                              "max": float(times.max()), "mean": float(times.mean())},
         "by_group": {k: dict(v) for k, v in sorted(by_group.items())},
+        "branch_ends_early": branch_ends_early(scenes, outcomes),
         "failures": failures,
     }
+
+
+def branch_ends_early(scenes: list[dict], outcomes: list[dict]) -> dict:
+    """Count and spread of the histories whose no-slip delamination branch ends early.
+
+    Parameters
+    ----------
+    scenes : list of dict
+        The scenes, in run order.
+    outcomes : list of dict
+        Their outcomes (``run_one``), same order.
+
+    Returns
+    -------
+    dict
+        ``count``; ``ends_at_over_a_max``: min, median and max of ``delamination_ends_at_a / a_max``
+        (None when there are none); ``examples``: the first ``KEEP`` of them (index, scene, ratio).
+    """
+    idx = [i for i, o in enumerate(outcomes) if o["kind"] == EARLY]
+    r = np.array([outcomes[i]["ends_at_over_a_max"] for i in idx], dtype=float)
+    spread = {"min": float(r.min()), "median": float(np.median(r)), "max": float(r.max())} if r.size else None
+    return {"count": len(idx), "ends_at_over_a_max": spread,
+            "examples": [{"index": i, "scene": _jsonable(scenes[i]),
+                          "ends_at_over_a_max": outcomes[i]["ends_at_over_a_max"]} for i in idx[:KEEP]]}
 
 
 def machine_info() -> dict:
@@ -376,11 +522,12 @@ def write_markdown(rep: dict, path: Path) -> None:
         "Machine: " + ", ".join(f"{k} {v}" for k, v in rep["machine"].items()), "",
         "| outcome | scenes | share |", "|---|---:|---:|",
     ]
-    lines += [f"| {k} | {v} | {100 * v / rep['n']:.2f} % |" for k, v in rep["counts"].items()]
+    lines += [f"| {LABELS.get(k, k)} | {v} | {100 * v / rep['n']:.2f} % |" for k, v in rep["counts"].items()]
     lines += ["", f"Time per scene: median {1e3 * t['median']:.2f} ms, 95th percentile "
-              f"{1e3 * t['p95']:.2f} ms, max {1e3 * t['max']:.1f} ms, mean {1e3 * t['mean']:.2f} ms.", "",
-              "## By group (control / slip / substrate / loading end)", "",
-              "| group | " + " | ".join(KINDS) + " |", "|---|" + "---:|" * len(KINDS)]
+              f"{1e3 * t['p95']:.2f} ms, max {1e3 * t['max']:.1f} ms, mean {1e3 * t['mean']:.2f} ms.", ""]
+    lines += _early_markdown(rep["branch_ends_early"])
+    lines += ["## By group (control / slip / substrate / loading end)", "",
+              "| group | " + " | ".join(LABELS.get(k, k) for k in KINDS) + " |", "|---|" + "---:|" * len(KINDS)]
     for g, c in rep["by_group"].items():
         lines.append(f"| {g} | " + " | ".join(str(c.get(k, 0)) for k in KINDS) + " |")
     if "crosscheck" in rep:
@@ -415,6 +562,22 @@ def write_markdown(rep: dict, path: Path) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def _early_markdown(early: dict) -> list[str]:
+    """The stress.md section on histories whose no-slip delamination branch ends early."""
+    lines = ["## No-slip histories whose delamination branch ends early", "",
+             "Weak adhesion: the quasi-static delamination branch ends at a finite contact radius "
+             f"(`inputs[\"{ENDS_AT}\"]`), where the stretch mismatch alone releases w; detachment from "
+             "there is dynamic (README, \"Weak adhesion with no slip\"). These histories pass every other "
+             "check and stop on a delamination row at exactly that radius; they are valid outcomes, "
+             "not invariant violations.", ""]
+    spread = early["ends_at_over_a_max"]
+    if spread is None:
+        return lines + [f"{early['count']} scenes.", ""]
+    lines += [f"{early['count']} scenes. `{ENDS_AT} / a_max`: min {spread['min']:.3g}, "
+              f"median {spread['median']:.3g}, max {spread['max']:.3g}.", ""]
+    return lines
+
+
 def crosscheck(rep: dict, args: argparse.Namespace) -> None:
     """Run the scipy baseline on every kept failing a_max scene; annotate the failures in place."""
     items = [it for kind, lst in rep["failures"].items() if kind != "input_error" for it in lst
@@ -433,7 +596,11 @@ def crosscheck(rep: dict, args: argparse.Namespace) -> None:
 
 
 def compare(scenes: list[dict], outcomes: list[dict], args: argparse.Namespace) -> dict:
-    """Engine vs baseline on the engine's rows for the first ``--compare`` successful a_max scenes."""
+    """Engine vs baseline on the engine's rows for the first ``--compare`` successful a_max scenes.
+
+    Plain successes only: histories whose delamination branch ends early are left out (they were
+    counted as invariant violations before they had their own kind), so a seed compares the same scenes.
+    """
     idx = [i for i, o in enumerate(outcomes) if o["kind"] == "success" and "a_max" in scenes[i]][:args.compare]
     print(f"compare: engine vs baseline on {len(idx)} solved scenes", file=sys.stderr, flush=True)
     res = run_all([scenes[i] for i in idx], args.workers, args.timeout, progress=False, task="compare")
