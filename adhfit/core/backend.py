@@ -324,7 +324,7 @@ def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: boo
     targets = np.atleast_1d(np.asarray(targets, float))
     c, w, a_m, L_m = _ctx(ctx)
     pressure = d_fix is not None
-    status, n_out, ox, ok_, pl, px, pk, _ = P.follow_kernel(
+    status, n_out, ox, ok_, pl, px, pk, _, _ = P.follow_kernel(
         _code(branch), pressure, float(l0), targets, math.nan if x0 is None else float(x0),
         float(k0), c, w, a_m, L_m, float(d_fix) if pressure else 0.0, bool(log), int(max_steps),
         bool(allow_end))

@@ -678,10 +678,17 @@ KEY_CODES = {"a": 0, "alpha": 1, "p": 2, "d": 3, "f": 4, "G": 5, "J0": 6}
 
 @_jit
 def _solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix):
-    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``."""
-    xs, ks, status = solve_batch(code, pressure, np.array([loc]), np.array([k]), np.array([xg]),
-                                 _implicit(code), c, w, a_m, L_m, d_fix)
-    return xs[0], ks[0], status[0]
+    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``.
+
+    The one-row case of :func:`solve_batch`, without its arrays.
+    """
+    implicit = _implicit(code)
+    if pressure:
+        return _pressure_one(code, loc, c, w, a_m, L_m, d_fix, k, xg, implicit)
+    if implicit:
+        x, st = _inner_one(code, k, loc, c, w, a_m, L_m, xg, True)
+        return x, k, st
+    return 0.0, k, OK
 
 
 @_jit
@@ -736,12 +743,15 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
         Every accepted step (locators, x, kappa); x NaN on explicit branches.
     last : ndarray, shape (7,)
         Observables a, alpha, p, d, f, G, J0 of the last accepted step (NaN if none).
+    out_obs : ndarray, shape (7, n_targets)
+        The same at the targets reached (``out_obs[:, :n_out]``).
     """
     implicit = _implicit(code)
     n_t = targets.size
     cap = max_steps + 2
     ss, xs, ks = np.empty(cap), np.empty(cap), np.empty(cap)
     out_x, out_k = np.empty(n_t), np.empty(n_t)
+    out_obs = np.empty((7, n_t))
     ss[0] = math.log(l0) if log else l0
     xs[0] = x0 if implicit else math.nan
     ks[0] = k0
@@ -783,13 +793,14 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
         m += 1
         if s_new == goal:
             out_x[n_out], out_k[n_out] = xs[m - 1], ks[m - 1]
+            out_obs[:, n_out] = obs
             n_out += 1
             i += 1
         h = min(1.6 * h, span / 8.0)
     path_l = np.empty(m)
     for j in range(m):
         path_l[j] = math.exp(ss[j]) if log else ss[j]
-    return status, n_out, out_x, out_k, path_l, xs[:m].copy(), ks[:m].copy(), last_obs
+    return status, n_out, out_x, out_k, path_l, xs[:m].copy(), ks[:m].copy(), last_obs, out_obs
 
 
 @_jit
@@ -884,6 +895,18 @@ def _brent(code, pressure, xa, xb, fa, fb, rl, rx, rk, kappa, c, w, a_m, L_m, d_
 
 
 @_jit
+def _probe(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign, obs):
+    """:func:`_value` and :func:`_slope_at` at ``loc`` from one solve: (value, slope); the
+    observables go to ``obs``."""
+    x, k, st = _solve_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix)
+    if st != 0:
+        return -math.inf, math.nan
+    ok = _observe(code, x, k, loc, c, w, a_m, obs)
+    v = sign * obs[key] if _admissible(ok, obs) else -math.inf
+    return v, _slope_of(code, pressure, loc, x, k, c, w, a_m, L_m, key)
+
+
+@_jit
 def extremum_kernel(code, pressure, lo, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
                     xtol, rtol, maxiter):
     """continuation.extremum in one call.
@@ -901,12 +924,15 @@ def extremum_kernel(code, pressure, lo, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d
     obs = np.empty(7)
     best = lo
     if lo != hi:
-        s_lo, _ = _slope_at(code, pressure, lo, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key)
-        s_hi, _ = _slope_at(code, pressure, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key)
-        v_best = _value(code, pressure, lo, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign, obs)
-        v = _value(code, pressure, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign, obs)
+        # each candidate is solved once; the best one's observables are kept
+        best_obs = np.empty(7)
+        v_best, s_lo = _probe(code, pressure, lo, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key,
+                              sign, best_obs)
+        v, s_hi = _probe(code, pressure, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
+                         obs)
         if v > v_best:
             best, v_best = hi, v
+            best_obs[:] = obs
         if math.isfinite(s_lo) and math.isfinite(s_hi) and s_lo * s_hi < 0:
             root, st = _brent(code, pressure, lo, hi, s_lo, s_hi, rl, rx, rk, kappa, c, w, a_m, L_m,
                               d_fix, key, xtol, rtol, maxiter)
@@ -915,7 +941,10 @@ def extremum_kernel(code, pressure, lo, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d
             v = _value(code, pressure, root, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
                        obs)
             if v > v_best:
-                best = root
+                best, v_best = root, v
+                best_obs[:] = obs
+        if v_best > -math.inf:  # admissible, so ok
+            return E_OK, best, best_obs, True
     x, k, st = _solve_at(code, pressure, best, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix)
     if st != 0:
         return E_SOLVE, best, obs, False
@@ -1088,7 +1117,7 @@ def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fi
                                                        a_m, L_m, d_fix)
     if _all_good(status, ok, out):
         return xs, ks, out, bad < 0
-    st, n_out, ox, okp, _, _, _, _ = follow_kernel(code, pressure, l0, locs, x0, k0, c, w, a_m,
+    st, n_out, ox, okp, _, _, _, _, _ = follow_kernel(code, pressure, l0, locs, x0, k0, c, w, a_m,
                                                    L_m, d_fix, log, 2000, False)
     if st != F_OK or n_out != n:
         return xs, ks, out, False
@@ -1175,15 +1204,15 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
     end = w if no_slip else math.atan(math.sqrt(2.0 * w))
     n_pin = u_pin.size
     lp = end * (u_pin * u_pin if no_slip else u_pin)
-    st, n_out, x_pin, k_pin, _, _, _, _ = follow_kernel(pin_code, pressure, 0.0, lp,
-                                                        1.0 if no_slip else a_m, kappa_m, c, w,
-                                                        a_m, L_m, d_fix, False, 2000, False)
+    st, n_out, x_pin, k_pin, _, _, _, _, out_pin = follow_kernel(
+        pin_code, pressure, 0.0, lp, 1.0 if no_slip else a_m, kappa_m, c, w, a_m, L_m, d_fix, False,
+        2000, False)
     if st != F_OK or n_out != n_pin:
         return fail
-    out_pin, ok_pin = evaluate_batch(pin_code, x_pin, k_pin, lp, c, w, a_m)
-    if first_bad(ok_pin, out_pin[0], out_pin[1], out_pin[2], out_pin[3], out_pin[4],
-                 out_pin[5]) >= 0:
-        return fail
+    # every step follow accepts is admissible with a finite force; the rest of first_bad's test:
+    for i in range(n_pin):
+        if not _admissible(True, out_pin[:, i]):
+            return fail
     onset = out_pin[:, n_pin - 1].copy()
     on_x = x_pin[n_pin - 1]
     a_on, k_on = onset[0], onset[2]
@@ -1201,16 +1230,15 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
         good = first_bad(ok_dl, out_dl[0], out_dl[1], out_dl[2], out_dl[3], out_dl[4],
                          out_dl[5]) < 0
     else:
-        st, n_out, x_dl, k_dl, dl_l, dl_x, dl_k, _ = follow_kernel(
+        st, n_out, x_dl, k_dl, dl_l, dl_x, dl_k, _, out_dl = follow_kernel(
             dl_code, pressure, a_on, a_dl, x_start, k_on, c, w, a_m, L_m, d_fix, True, 2000,
             no_slip)
         if st != F_OK:
             return fail
         if n_out == n_dl:
-            out_dl, ok_dl = evaluate_batch(dl_code, x_dl if dl_implicit else a_dl, k_dl, a_dl, c,
-                                           w, a_m)
-            good = first_bad(ok_dl, out_dl[0], out_dl[1], out_dl[2], out_dl[3], out_dl[4],
-                             out_dl[5]) < 0
+            good = True
+            for i in range(n_dl):
+                good = good and _admissible(True, out_dl[:, i])
         else:
             # the branch ends before a_end: rows up to its end, predictors from the path
             branch_end = a_end = dl_l[dl_l.size - 1]
