@@ -275,12 +275,13 @@ def _pinning_path(slip, ctx, kappa_m, d_fix):
     return _follow(pin, 0.0, np.array([end]), x0, kappa_m, ctx, d_fix, log=False)[1]
 
 
-def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, max_steps=2000, allow_end=False):
+def _follow(branch, l0, targets, x0, k0, ctx, d_fix, *, log, sqrt=False, max_steps=2000,
+            allow_end=False):
     """Follow a branch from locator l0 (solved: x0, k0) through ``targets`` (continuation).
 
     See :func:`adhfit.core.continuation.follow` (one compiled call under the numba backend).
     """
-    return follow(branch, l0, targets, x0, k0, ctx, d_fix, log=log, max_steps=max_steps,
+    return follow(branch, l0, targets, x0, k0, ctx, d_fix, log=log, sqrt=sqrt, max_steps=max_steps,
                   allow_end=allow_end)
 
 
@@ -399,7 +400,7 @@ def _history_steps(v, c, pc, info):
     end = _pin_end(slip, ctx)
     lp = end * (u_pin * u_pin if slip == "no-slip" else u_pin)
     (_, x_pin, k_pin), _ = _follow(pin, 0.0, lp, 1.0 if slip == "no-slip" else ctx.a_m, kappa_m,
-                                   ctx, d_fix if pc else None, log=False)
+                                   ctx, d_fix if pc else None, log=False, sqrt=slip == "no-slip")
     s_pin = evaluate(pin, x_pin, k_pin, lp, ctx)
     onset = {k: v[-1:] for k, v in s_pin.items()}
     on_x = x_pin[-1:]

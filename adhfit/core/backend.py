@@ -308,7 +308,7 @@ def _paths():
 
 
 def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: bool,
-           max_steps: int = 2000, allow_end: bool = False):
+           sqrt: bool = False, max_steps: int = 2000, allow_end: bool = False):
     """Follow a branch from a solved state through target locators (see :func:`.continuation.follow`).
 
     Returns
@@ -318,15 +318,16 @@ def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: boo
     """
     K = _compiled()
     if K is None:
-        return continuation.follow(branch, l0, targets, x0, k0, ctx, d_fix, log=log,
+        return continuation.follow(branch, l0, targets, x0, k0, ctx, d_fix, log=log, sqrt=sqrt,
                                    max_steps=max_steps, allow_end=allow_end)
     P = _paths()
     targets = np.atleast_1d(np.asarray(targets, float))
     c, w, a_m, L_m = _ctx(ctx)
     pressure = d_fix is not None
+    scale = P.SCALE_LOG if log else (P.SCALE_SQRT if sqrt else P.SCALE_LINEAR)
     status, n_out, ox, ok_, pl, px, pk, _, _ = P.follow_kernel(
         _code(branch), pressure, float(l0), targets, math.nan if x0 is None else float(x0),
-        float(k0), c, w, a_m, L_m, float(d_fix) if pressure else 0.0, bool(log), int(max_steps),
+        float(k0), c, w, a_m, L_m, float(d_fix) if pressure else 0.0, scale, int(max_steps),
         bool(allow_end))
     if status == P.F_STEPS:
         raise ConvergenceError(f"{branch.stage} ({branch.slip}): too many continuation steps",

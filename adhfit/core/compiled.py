@@ -710,6 +710,28 @@ def _admissible(ok, out):
     return True
 
 
+#: step variables of follow_kernel: the locator, its logarithm, its square root
+SCALE_LINEAR, SCALE_LOG, SCALE_SQRT = 0, 1, 2
+
+
+@_jit
+def _to_step(scale, loc):
+    if scale == SCALE_LOG:
+        return math.log(loc)
+    if scale == SCALE_SQRT:
+        return math.sqrt(loc)
+    return loc
+
+
+@_jit
+def _from_step(scale, s):
+    if scale == SCALE_LOG:
+        return math.exp(s)
+    if scale == SCALE_SQRT:
+        return s * s
+    return s
+
+
 @_jit
 def _predict(ss, xs, ks, m, s):
     """continuation._predict: x, kappa at s extrapolated from the last accepted states (quadratic
@@ -728,9 +750,12 @@ def _predict(ss, xs, ks, m, s):
 
 
 @_jit
-def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, log, max_steps,
+def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, max_steps,
                   allow_end):
     """continuation.follow in one call.
+
+    ``scale`` is the step variable: ``SCALE_LINEAR`` (the locator), ``SCALE_LOG`` (``log=True``) or
+    ``SCALE_SQRT`` (``sqrt=True``).
 
     Returns
     -------
@@ -752,11 +777,11 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
     ss, xs, ks = np.empty(cap), np.empty(cap), np.empty(cap)
     out_x, out_k = np.empty(n_t), np.empty(n_t)
     out_obs = np.empty((7, n_t))
-    ss[0] = math.log(l0) if log else l0
+    ss[0] = _to_step(scale, l0)
     xs[0] = x0 if implicit else math.nan
     ks[0] = k0
     m = 1
-    last = math.log(targets[n_t - 1]) if log else targets[n_t - 1]
+    last = _to_step(scale, targets[n_t - 1])
     span = abs(last - ss[0])
     if span == 0.0:
         span = 1.0
@@ -769,14 +794,14 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
         if steps > max_steps:
             status = F_STEPS
             break
-        goal = math.log(targets[i]) if log else targets[i]
+        goal = _to_step(scale, targets[i])
         gap = goal - ss[m - 1]
         # a gap within rounding of the goal is closed in one step (a step below the spacing of
         # floats would not move)
         near = abs(gap) <= h or abs(gap) <= GAP_CLOSE * (1.0 + abs(goal))
         s_new = goal if near else ss[m - 1] + math.copysign(h, gap)
         xg, kg = _predict(ss, xs, ks, m, s_new)
-        loc = math.exp(s_new) if log else s_new
+        loc = _from_step(scale, s_new)
         x, k, st = _solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix)
         good = st == 0
         if good:
@@ -799,7 +824,7 @@ def follow_kernel(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, lo
         h = min(1.6 * h, span / 8.0)
     path_l = np.empty(m)
     for j in range(m):
-        path_l[j] = math.exp(ss[j]) if log else ss[j]
+        path_l[j] = _from_step(scale, ss[j])
     return status, n_out, out_x, out_k, path_l, xs[:m].copy(), ks[:m].copy(), last_obs, out_obs
 
 
@@ -1118,7 +1143,8 @@ def _rows_k(code, pressure, locs, kappa_dc, kg, xg, has_xg, c, w, a_m, L_m, d_fi
     if _all_good(status, ok, out):
         return xs, ks, out, bad < 0
     st, n_out, ox, okp, _, _, _, _, _ = follow_kernel(code, pressure, l0, locs, x0, k0, c, w, a_m,
-                                                   L_m, d_fix, log, 2000, False)
+                                                   L_m, d_fix, SCALE_LOG if log else SCALE_LINEAR,
+                                                   2000, False)
     if st != F_OK or n_out != n:
         return xs, ks, out, False
     xe = ox if _implicit(code) else locs
@@ -1205,8 +1231,8 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
     n_pin = u_pin.size
     lp = end * (u_pin * u_pin if no_slip else u_pin)
     st, n_out, x_pin, k_pin, _, _, _, _, out_pin = follow_kernel(
-        pin_code, pressure, 0.0, lp, 1.0 if no_slip else a_m, kappa_m, c, w, a_m, L_m, d_fix, False,
-        2000, False)
+        pin_code, pressure, 0.0, lp, 1.0 if no_slip else a_m, kappa_m, c, w, a_m, L_m, d_fix,
+        SCALE_SQRT if no_slip else SCALE_LINEAR, 2000, False)
     if st != F_OK or n_out != n_pin:
         return fail
     # every step follow accepts is admissible with a finite force; the rest of first_bad's test:
@@ -1231,7 +1257,7 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
                          out_dl[5]) < 0
     else:
         st, n_out, x_dl, k_dl, dl_l, dl_x, dl_k, _, out_dl = follow_kernel(
-            dl_code, pressure, a_on, a_dl, x_start, k_on, c, w, a_m, L_m, d_fix, True, 2000,
+            dl_code, pressure, a_on, a_dl, x_start, k_on, c, w, a_m, L_m, d_fix, SCALE_LOG, 2000,
             no_slip)
         if st != F_OK:
             return fail

@@ -57,13 +57,14 @@ def _predict(ss, xs, ks, s):
 
 
 def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: bool,
-           max_steps: int = 2000, allow_end: bool = False):
+           sqrt: bool = False, max_steps: int = 2000, allow_end: bool = False):
     """Follow a branch from locator l0 (solved: x0, k0) through ``targets`` (continuation).
 
     ``d_fix`` None means displacement control (kappa fixed at k0); else kappa is solved from the gap.
 
-    Steps are taken in the locator (``log=False``) or in its logarithm (``log=True``, for the contact
-    radius on the way to detachment) and land exactly on every target; each state starts from a
+    Steps are taken in the locator, in its logarithm (``log=True``, for the contact radius on the
+    way to detachment) or in its square root (``sqrt=True``, for no-slip pinning located by G, where
+    the state is smooth in sqrt(G) ~ alpha but not in G) and land exactly on every target; each state starts from a
     quadratic extrapolation of the last three (:func:`_predict`); a failed or out-of-domain step is
     halved.
 
@@ -83,7 +84,12 @@ def follow(branch: Branch, l0, targets, x0, k0, ctx: Context, d_fix, *, log: boo
         The step fell below 1e-10 of the span (the state leaves the model's domain), or more than
         ``max_steps`` steps were needed.
     """
-    fwd, back = (np.log, np.exp) if log else ((lambda z: z), (lambda z: z))
+    if log:
+        fwd, back = np.log, np.exp
+    elif sqrt:
+        fwd, back = np.sqrt, np.square
+    else:
+        fwd = back = (lambda z: z)
     targets = np.atleast_1d(np.asarray(targets, float))
     ss = [fwd(l0)]
     xs, ks = [np.nan if x0 is None else float(x0)], [float(k0)]
