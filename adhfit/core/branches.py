@@ -252,12 +252,22 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
 
 #: iterations of the joint (x, kappa) Newton before the nested solve takes over
 JOINT_MAXITER = 12
-#: it stops after a Newton step below JOINT_STOP (1 + |x|): convergence is quadratic, so the error
-#: left after that step is ~M 1e-18 (M the ratio of second to first derivatives), far below XTOL
-JOINT_STOP = 1e-9
 #: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
 #: step before it; otherwise the next iteration takes a fresh Jacobian
 CHORD_RATE = 0.01
+
+
+def _converged(fresh, size, prev):
+    """Converged after a step of relative ``size`` (``prev``: the step before it, inf if none).
+
+    The error left is estimated from the observed convergence: a Newton step (fresh Jacobian)
+    leaves ~M size^2 with M ~ size / prev^2, a chord step ~(size / prev) size; it must be below
+    XTOL. A first step has no estimate and must itself be below XTOL. (A fixed threshold on the
+    step is not safe: next to a fold of the branch M is large.)
+    """
+    r = np.minimum(1.0, size / prev)
+    est = np.where(np.isfinite(prev), size * np.where(fresh, r * r, r), size)
+    return est <= XTOL
 
 
 def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
@@ -267,7 +277,7 @@ def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
     (chord steps, one real evaluation each) while each step is below CHORD_RATE times the one before
     and take a fresh Jacobian otherwise. From a continuation predictor a row converges in one Newton
     and one or two chord steps, several times cheaper than the nested solve. It stops after a Newton
-    step below JOINT_STOP or a chord step that leaves an error below XTOL.
+    step or a chord step whose estimated remaining error is below XTOL (:func:`_converged`).
 
     No safeguard: a non-finite or inadmissible iterate, a singular Jacobian, no convergence in
     JOINT_MAXITER iterations or a root outside x's bracket marks the row failed (``good`` False);
@@ -307,7 +317,7 @@ def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
             dk = np.where(exact, 0.0, -(Rx * G - R * Gx) / det)
             size = np.maximum(np.abs(dx) / (1.0 + np.abs(x)), np.abs(dk) / (1.0 + np.abs(k)))
             # a Newton step leaves an error of ~M size^2; a chord step ~(size / prev) size
-            small = np.where(fresh, size <= JOINT_STOP, size * np.minimum(1.0, size / prev) <= XTOL)
+            small = _converged(fresh, size, prev)
             x = np.where(run, x + dx, x)
             k = np.where(run, k + dk, k)
             done |= run & (exact | small)
@@ -342,7 +352,7 @@ def _gap_newton(branch, loc, ctx, d_fix, k0):
             run &= fine
             step = np.where(r == 0, 0.0, -r / dr)
             size = np.abs(step) / (1.0 + np.abs(k))
-            small = np.where(fresh, size <= JOINT_STOP, size * np.minimum(1.0, size / prev) <= XTOL)
+            small = _converged(fresh, size, prev)
             k = np.where(run, k + step, k)
             done |= run & ((r == 0) | small)
             fresh = np.where(run, ~(size <= CHORD_RATE * prev), fresh)

@@ -39,9 +39,6 @@ XTOL = 4e-15
 MAXITER = 60
 #: iterations of the joint (x, kappa) Newton before the nested solve takes over (as in branches)
 JOINT_MAXITER = 12
-#: the joint Newton stops after a Newton step below JOINT_STOP (1 + |x|): convergence is quadratic,
-#: so the error left after that step is ~M 1e-18 (M the ratio of second to first derivatives)
-JOINT_STOP = 1e-9
 #: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
 #: step before it; otherwise the next iteration takes a fresh Jacobian
 CHORD_RATE = 0.01
@@ -408,12 +405,17 @@ def _propagate(code, x, kappa, kc, lc, c, w, a_m, L_m):
 
 @_jit
 def _stop(fresh, size, prev):
-    """Converged after a step of relative ``size``: a Newton step (fresh Jacobian) leaves an error of
-    ~M size^2, so size <= JOINT_STOP suffices; a chord step leaves ~(size / prev) size, which must be
-    below XTOL."""
-    if fresh:
-        return size <= JOINT_STOP
-    return size * min(1.0, size / prev) <= XTOL
+    """Converged after a step of relative ``size`` (``prev``: the step before it, inf if none).
+
+    The error left is estimated from the observed convergence: a Newton step (fresh Jacobian)
+    leaves ~M size^2 with M ~ size / prev^2, a chord step ~(size / prev) size; it must be below
+    XTOL. A first step has no estimate and must itself be below XTOL. (A fixed threshold on the
+    step is not safe: next to a fold of the branch M is large.)
+    """
+    if not math.isfinite(prev):
+        return size <= XTOL
+    r = min(1.0, size / prev)
+    return size * (r * r if fresh else r) <= XTOL
 
 
 @_jit
