@@ -249,3 +249,27 @@ def test_reference_quadrature_against_plain_quadrature():
         plain1 = mp.quad(tan, [eta, a]) + mp.quad(tan, [eta, 1])
     # plain tanh-sinh keeps only ~half of its 60 digits at the 1/sqrt root: 1e-20 is far inside that
     assert abs(plain0 - j0) < 1e-20 and abs(plain1 - j1) < 1e-20
+
+
+# ---------------------------------------------------------------------------------------------
+# A history whose end of loading sits on the Case I boundary (clamp tangent nearly vertical,
+# p > 1): the engine's nested pressure solve used to stall here (gap with a square-root
+# singularity in kappa); the joint (t, kappa) Newton solves it. Checked live against the reference.
+# ---------------------------------------------------------------------------------------------
+CASE_I_EDGE = dict(d=0.9513958182807762, w=0.04150776459954417, rs=25.938505089226588,
+                   a_max=0.11539301887261694)
+
+
+def test_pressure_no_slip_history_on_the_case_one_boundary():
+    summ = adhfit.simulate("pressure", "no-slip", **CASE_I_EDGE).summary
+    ref = M.summary("pressure", "no-slip", **CASE_I_EDGE)
+    bad = _mismatches({"f_max": summ["f_max"]}, {"f_max": float(ref["f_max"])}, ("f_max",),
+                      TOL_SUMMARY)
+    for key in ("onset", "f_min", "turning_point"):
+        want = {k: (None if ref[key][k] is None else float(ref[key][k])) for k in SUMMARY_KEYS}
+        bad += [f"{key}.{m}" for m in _mismatches(summ[key], want, SUMMARY_KEYS, TOL_SUMMARY)]
+    for alpha in (0.01, 0.1, 0.153648):
+        got = state_at("pressure", "no-slip", "pinning", alpha=alpha, **CASE_I_EDGE)
+        want = _ref_state(CASE_I_EDGE, "pressure", "no-slip", "pinning", alpha=alpha)
+        bad += [f"alpha={alpha}: {m}" for m in _mismatches(got, want, STATE_KEYS, TOL_STATE)]
+    assert not bad, "; ".join(bad)
