@@ -296,17 +296,29 @@ def _implicit(code):
 # solves (solve.newton, branches.solve_unknown / solve_state / derivative), one row at a time
 
 
+#: residuals of :func:`_bracketed`: the material condition in x, the making-contact gap in kappa
+R_MATERIAL, R_MC_GAP = 0, 1
+
+
 @_jit
-def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
+def _resid(kind, code, z, kappa, loc, c, w, a_m, L_m, d_fix):
+    """Residual at complex z: the material condition in x at fixed kappa (``R_MATERIAL``), or the
+    gap of the making-contact state at radius ``loc`` with pressure z (``R_MC_GAP``)."""
+    if kind == R_MC_GAP:
+        return _mc_gap(z, loc, c, d_fix)
+    return _residual(code, z, complex(kappa, 0.0), complex(loc, 0.0), c, w, a_m, L_m)
+
+
+@_jit
+def _bracketed(kind, code, kappa, loc, c, w, a_m, L_m, d_fix, x0, lo, hi):
     """solve.newton with a bracket for one row: (x, status, r_lo, r_hi).
 
     Same rules: complex-step derivative, the bracket's residuals must differ in sign (checked), a
     Newton step that leaves the bracket (or a NaN step) is replaced by bisection, an exact zero
     residual is kept, converged when the step or the bracket is below xtol (1 + |x|).
     """
-    kc, lc = complex(kappa, 0.0), complex(loc, 0.0)
-    rlo = _residual(code, complex(lo, STEP), kc, lc, c, w, a_m, L_m).real
-    rhi = _residual(code, complex(hi, STEP), kc, lc, c, w, a_m, L_m).real
+    rlo = _resid(kind, code, complex(lo, STEP), kappa, loc, c, w, a_m, L_m, d_fix).real
+    rhi = _resid(kind, code, complex(hi, STEP), kappa, loc, c, w, a_m, L_m, d_fix).real
     # NaN at hi counts as the other side (the domain ends inside the bracket)
     if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
         return math.nan, FAIL_BRACKET, rlo, rhi
@@ -317,7 +329,7 @@ def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
     if x > max(lo, hi):
         x = max(lo, hi)
     for _ in range(MAXITER):
-        z = _residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
+        z = _resid(kind, code, complex(x, STEP), kappa, loc, c, w, a_m, L_m, d_fix)
         r, dr = z.real, z.imag / STEP
         finite = math.isfinite(r) and math.isfinite(dr)
         below = finite and ((r < 0) if neg_at_lo else (r > 0))
@@ -340,6 +352,12 @@ def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
                 return math.nan, FAIL_INNER, rlo, rhi
             return x, OK, rlo, rhi
     return math.nan, FAIL_INNER, rlo, rhi
+
+
+@_jit
+def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
+    """The unknown x of one row by :func:`_bracketed`: (x, status, r_lo, r_hi)."""
+    return _bracketed(R_MATERIAL, code, kappa, loc, c, w, a_m, L_m, 0.0, x0, lo, hi)
 
 
 @_jit
@@ -1017,38 +1035,12 @@ def _mc_gap(kc, a, c, d_fix):
 
 @_jit
 def _mc_bracketed(a, c, d_fix, l, h):
-    """branches.mc_pressure for one row: bracketed Newton (solve.newton's rules) on the gap.
+    """branches.mc_pressure for one row, by :func:`_bracketed` from the middle of [l, h].
 
     Returns (kappa, status): ``OK``, ``FAIL_BRACKET`` or ``FAIL_INNER``.
     """
-    rlo = _mc_gap(complex(l, STEP), a, c, d_fix).real
-    rhi = _mc_gap(complex(h, STEP), a, c, d_fix).real
-    if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
-        return math.nan, FAIL_BRACKET
-    neg_at_lo = rlo < 0
-    x = min(max(0.5 * (l + h), min(l, h)), max(l, h))
-    for _ in range(MAXITER):
-        z = _mc_gap(complex(x, STEP), a, c, d_fix)
-        r, dr = z.real, z.imag / STEP
-        finite = math.isfinite(r) and math.isfinite(dr)
-        below = finite and ((r < 0) if neg_at_lo else (r > 0))
-        if below:
-            l = x
-        elif finite:
-            h = x
-        xn = x + (-r / dr) if (finite and dr != 0) else math.nan
-        inside = math.isfinite(xn) and min(l, h) <= xn <= max(l, h)
-        exact = finite and r == 0
-        if exact:
-            xn = x
-        elif not inside:
-            xn = 0.5 * (l + h)
-        tol = XTOL * (1.0 + abs(x))
-        done = exact or (inside and abs(xn - x) <= tol) or abs(h - l) <= tol
-        x = xn
-        if done:
-            return (x, OK) if finite else (math.nan, FAIL_INNER)
-    return math.nan, FAIL_INNER
+    k, st, _, _ = _bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (l + h), l, h)
+    return k, st
 
 
 @_jit
