@@ -460,8 +460,8 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
     out = {}
     # concatenated retraction path: onset is the last pinning row / first delamination row
     n_pin = stages["pinning"][1].size
-    for name, key, sign in (("turning_point", "p" if pc else "d", -1.0 if pc else 1.0),
-                            ("f_min", "f", -1.0)):
+    specs = (("turning_point", "p" if pc else "d", -1.0 if pc else 1.0), ("f_min", "f", -1.0))
+    for name, key, sign in specs:
         vals = sign * np.concatenate([np.real(stages["pinning"][2][key]),
                                       np.real(stages["delamination"][2][key])])
         j = int(np.argmax(vals))
@@ -479,7 +479,18 @@ def _extrema(stages, ctx, pc, kappa, d_fix, onset):
         loc, solved = extremum(branch, lo, hi, ctx, d_fix if pc else None, kappa, key, sign, rows)
         _check(solved, name.replace("_", " "), {"stage": stage, branch.locator: float(loc)})
         state = _real(solved, 0)
+        if sign * state[key] < vals[j]:
+            # the row itself is better: the search could not re-solve an end of its bracket, which
+            # happens where that row is the end of a no-slip delamination branch (a fold); the
+            # extremum is then that end of the history
+            loc, state = locs[i], _real(st, i)
         out[name] = (stage, float(loc), state)
+    # each is also held against the other's state (a solved state of the history, inserted as a
+    # row): next to such a fold the other search may have found the better state
+    found = dict(out)
+    for (name, key, sign), other in zip(specs, ("f_min", "turning_point")):
+        if sign * found[other][2][key] > sign * found[name][2][key]:
+            out[name] = found[other]
     return out
 
 

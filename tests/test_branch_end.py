@@ -12,6 +12,7 @@ branch folds there); just below it neither has one.
 """
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from adhfit.errors import ConvergenceError
@@ -55,3 +56,28 @@ def test_branch_end_agrees_with_the_reference(control, kw):
         M.state(control, "no-slip", "delamination", a=a, **kw)
     with pytest.raises(ConvergenceError):
         state_at(control, "no-slip", "delamination", a=a, **kw)
+
+
+#: histories whose force minimum sits next to the end of the branch (found by the stress run):
+#: the state at that end cannot be re-solved (a fold), so the extremum searches there fall back on
+#: the rows and on each other's solved state
+FOLD_EXTREMA = [
+    ("displacement", dict(p=0.7055031730751964, w=0.00015430059527361725, rs=float("inf"),
+                          a_max=0.5285278931100347)),
+    ("pressure", dict(d=0.8686112266428161, w=0.0031809970016505513, rs=0.1587287739460948,
+                      a_max=0.04720687647560918)),
+]
+
+
+@pytest.mark.parametrize("control,kw", FOLD_EXTREMA, ids=[c for c, _ in FOLD_EXTREMA])
+def test_extrema_next_to_the_branch_end_bound_every_row(control, kw):
+    h = history(control, "no-slip", points=50, **kw)
+    cols, summ = h.columns, h.summary
+    retraction = cols["stage"] != "making_contact"
+    assert "delamination_ends_at_a" in h.inputs
+    assert summ["f_min"]["f"] <= cols["f"][retraction].min()
+    # the turning point of the control variable: the least p (pressure control) or the largest
+    # gap d, i.e. the least displacement delta = d0(p) - d (displacement control)
+    key, sign = ("p", -1.0) if control == "pressure" else ("delta", -1.0)
+    tp = sign * summ["turning_point"][key]
+    assert tp >= np.nanmax(sign * cols[key][retraction]) - 1e-15

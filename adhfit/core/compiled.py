@@ -1312,8 +1312,21 @@ def history_kernel(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, u_mc, 
             ext_stage[e] = 2
         if not good:
             return fail
+        if sign * obs[key] < best:  # the row is better (loading._extrema)
+            if j < n_pin:
+                loc, obs = lp[j], out_pin[:, j].copy()
+            else:
+                loc, obs = a_dl[j - n_pin], out_dl[:, j - n_pin].copy()
         ext_loc[e] = loc
         summary[S_TP if e == 0 else S_FMIN, :] = obs[:6]
+    # each is also held against the other's state (loading._extrema)
+    tp, fm = summary[S_TP, :].copy(), summary[S_FMIN, :].copy()
+    tp_stage, tp_loc, fm_stage, fm_loc = ext_stage[0], ext_loc[0], ext_stage[1], ext_loc[1]
+    k_tp, s_tp = (2, -1.0) if pressure else (3, 1.0)
+    if s_tp * fm[k_tp] > s_tp * tp[k_tp]:
+        summary[S_TP, :], ext_stage[0], ext_loc[0] = fm, fm_stage, fm_loc
+    if -tp[4] > -fm[4]:
+        summary[S_FMIN, :], ext_stage[1], ext_loc[1] = tp, tp_stage, tp_loc
 
     # 6. assemble: free inflation, making contact, pinning, delamination; insert the extrema
     n0 = 1 + n_mc + n_pin + n_dl
