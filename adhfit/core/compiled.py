@@ -42,6 +42,8 @@ JOINT_MAXITER = 12
 #: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
 #: step before it; otherwise the next iteration takes a fresh Jacobian
 CHORD_RATE = 0.01
+#: relative step of the forward differences of the joint Newton's Jacobian, sqrt(machine epsilon)
+FD_STEP = 1.4901161193847656e-08
 #: relative truncation error aimed at in the Carlson series (both are 7th-degree, DLMF 19.36.1-2)
 _RERR = 1e-16
 _RF_FACTOR = 1.0 / (3.0 * _RERR) ** 0.125
@@ -437,36 +439,49 @@ def _stop(fresh, size, prev):
 
 
 @_jit
+def _jacobian(code, x, kappa, loc, c, w, a_m, s0):
+    """d(J0, d)/d(x, kappa) at a real state ``s0`` (its ``_state``): (Rx, Gx, Rk, Gk).
+
+    Forward differences with steps FD_STEP (1 + |x|) and FD_STEP (1 + |kappa|): two real
+    evaluations, good to ~1e-8 relative, which only sets how fast the joint Newton converges (its
+    residuals are exact). Where a perturbed state is outside the model, two complex steps instead.
+    """
+    hx, hk = FD_STEP * (1.0 + abs(x)), FD_STEP * (1.0 + abs(kappa))
+    sx = _state(code, x + hx, kappa, loc, c, w, a_m, True)
+    sk = _state(code, x, kappa + hk, loc, c, w, a_m, True)
+    if sx[6] and sk[6]:
+        return ((sx[5] - s0[5]) / hx, (sx[2] - s0[2]) / hx, (sk[5] - s0[5]) / hk,
+                (sk[2] - s0[2]) / hk)
+    lc = complex(loc, 0.0)
+    s1 = _state(code, complex(x, STEP), complex(kappa, 0.0), lc, c, w, a_m, True)
+    s2 = _state(code, complex(x, 0.0), complex(kappa, STEP), lc, c, w, a_m, True)
+    return s1[5].imag / STEP, s1[2].imag / STEP, s2[5].imag / STEP, s2[2].imag / STEP
+
+
+@_jit
 def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x):
     """branches._joint_newton for one row: (x, kappa, converged).
 
     Newton on the pair (material condition, gap) in (x, kappa) from a predictor. The first
-    iteration takes the exact 2x2 Jacobian from two complex steps; later ones reuse it (chord steps,
-    one real evaluation each) while each step is below CHORD_RATE times the one before, and take a
-    fresh Jacobian otherwise. It stops as :func:`_stop` says. No safeguard: a non-finite or
+    iteration takes the 2x2 Jacobian (:func:`_jacobian`); later ones reuse it (chord steps, one real
+    evaluation each) while each step is below CHORD_RATE times the one before, and take a fresh
+    Jacobian otherwise. It stops when the error left, estimated from the observed rate of
+    convergence, is below XTOL (:func:`_stop`, chord rule). No safeguard: a non-finite or
     inadmissible iterate, a singular Jacobian, no convergence in JOINT_MAXITER or a root outside x's
     bracket is a failure.
     """
-    lc = complex(loc, 0.0)
-    tgt = _target(code, lc, c, a_m, L_m).real
+    tgt = _target(code, complex(loc, 0.0), c, a_m, L_m).real
     Rx = Gx = Rk = Gk = det = 0.0
     fresh = True
     prev = math.inf
     for _ in range(JOINT_MAXITER):
+        s0 = _state(code, x, kappa, loc, c, w, a_m, True)
+        if not s0[6]:
+            return math.nan, math.nan, False
+        R, G = s0[5] - tgt, s0[2] - d_fix
         if fresh:
-            s1 = _state(code, complex(x, STEP), complex(kappa, 0.0), lc, c, w, a_m, True)
-            s2 = _state(code, complex(x, 0.0), complex(kappa, STEP), lc, c, w, a_m, True)
-            if not (s1[6] and s2[6]):
-                return math.nan, math.nan, False
-            R, G = s1[5].real - tgt, s1[2].real - d_fix
-            Rx, Gx = s1[5].imag / STEP, s1[2].imag / STEP
-            Rk, Gk = s2[5].imag / STEP, s2[2].imag / STEP
+            Rx, Gx, Rk, Gk = _jacobian(code, x, kappa, loc, c, w, a_m, s0)
             det = Rx * Gk - Rk * Gx
-        else:
-            s0 = _state(code, x, kappa, loc, c, w, a_m, True)
-            if not s0[6]:
-                return math.nan, math.nan, False
-            R, G = s0[5] - tgt, s0[2] - d_fix
         if not (math.isfinite(R) and math.isfinite(G) and math.isfinite(det)) or det == 0:
             return math.nan, math.nan, False
         exact = R == 0 and G == 0
@@ -475,7 +490,7 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x):
         size = max(abs(dx) / (1.0 + abs(x)), abs(dk) / (1.0 + abs(kappa)))
         if not exact:
             x, kappa = x + dx, kappa + dk
-        if exact or _stop(fresh, size, prev):
+        if exact or _stop(False, size, prev):
             lo, hi = _bracket(code, loc, c, w, a_m)
             return x, kappa, min(lo, hi) <= x <= max(lo, hi)
         fresh = not (size <= CHORD_RATE * prev)
