@@ -228,6 +228,14 @@ def solve_state(branch: Branch, loc, ctx: Context, *, kappa=None, d_fix=None, ka
     if branch.target is not None:
         x0 = np.broadcast_to(np.asarray(x0, float), loc.shape)
         x, kappa, good = _joint_newton(branch, loc, ctx, d_fix, k0, x0)
+        if not np.all(good):
+            # next to a fold (det -> 0) the differences' ~1e-8 error can stall the iteration: the
+            # exact Jacobian is tried before the nested solve
+            retry = ~good
+            xr, kr, gr = _joint_newton(branch, loc[retry], ctx, d_fix, k0[retry], x0[retry],
+                                       fd=False)
+            x, kappa, good = x.copy(), kappa.copy(), good.copy()
+            x[retry], kappa[retry], good[retry] = xr, kr, gr
     else:
         x0, x = None, None
         kappa, good = _gap_newton(branch, loc, ctx, d_fix, k0)
@@ -272,33 +280,35 @@ def _converged(fresh, size, prev):
     return est <= XTOL
 
 
-def _jacobian(branch, x, k, loc, ctx, e0):
+def _jacobian(branch, x, k, loc, ctx, e0, fd):
     """d(J0, d)/d(x, kappa) at real states ``e0`` (their ``evaluate``): Rx, Gx, Rk, Gk.
 
     Forward differences with steps FD_STEP (1 + |x|) and FD_STEP (1 + |kappa|): two real
     evaluations, good to ~1e-8 relative, which only sets how fast the joint Newton converges (its
-    residuals are exact). Rows where a perturbed state is outside the model take two complex steps.
+    residuals are exact). Rows where a perturbed state is outside the model, or all rows when
+    ``fd`` is False, take two complex steps (exact).
     """
     hx, hk = FD_STEP * (1.0 + np.abs(x)), FD_STEP * (1.0 + np.abs(k))
     ex = evaluate(branch, x + hx, k, loc, ctx)
     ek = evaluate(branch, x, k + hk, loc, ctx)
     e1 = evaluate(branch, x + 1j * STEP, k + 0j, loc, ctx)
     e2 = evaluate(branch, x + 0j, k + 1j * STEP, loc, ctx)
-    fd = ex["ok"] & ek["ok"]
+    fd = fd & ex["ok"] & ek["ok"]
     return (np.where(fd, (ex["J0"] - e0["J0"]) / hx, np.imag(e1["J0"]) / STEP),
             np.where(fd, (ex["d"] - e0["d"]) / hx, np.imag(e1["d"]) / STEP),
             np.where(fd, (ek["J0"] - e0["J0"]) / hk, np.imag(e2["J0"]) / STEP),
             np.where(fd, (ek["d"] - e0["d"]) / hk, np.imag(e2["d"]) / STEP))
 
 
-def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
+def _joint_newton(branch, loc, ctx, d_fix, k0, x0, fd=True):
     """Pressure control: Newton on (material condition, gap) in (x, kappa) jointly, from predictors.
 
-    The first iteration takes the 2x2 Jacobian (:func:`_jacobian`); later ones reuse it (chord
-    steps, one real evaluation each) while each step is below CHORD_RATE times the one before and
-    take a fresh Jacobian otherwise. From a continuation predictor a row converges in two or three
+    The first iteration takes the 2x2 Jacobian (:func:`_jacobian`, by differences if ``fd``);
+    later ones reuse it (chord steps, one real evaluation each) while each step is below CHORD_RATE
+    times the one before and take a fresh Jacobian otherwise. From a continuation predictor a row converges in two or three
     iterations, several times cheaper than the nested solve. It stops when the error left, estimated
-    from the observed rate of convergence, is below XTOL (:func:`_converged`, chord rule).
+    from the observed rate of convergence, is below XTOL (:func:`_converged`; the Newton rule only
+    with the exact Jacobian).
 
     No safeguard: a non-finite or inadmissible iterate, a singular Jacobian, no convergence in
     JOINT_MAXITER iterations or a root outside x's bracket marks the row failed (``good`` False);
@@ -316,14 +326,13 @@ def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
     prev = np.full(loc.shape, np.inf)
     Rx, Gx, Rk, Gk = (np.zeros(loc.shape) for _ in range(4))
     target = np.real(branch.target(loc + 0j, ctx))
-    chord = np.zeros(loc.shape, bool)  # the stopping rule is the chord one throughout
     with np.errstate(all="ignore"):
         for _ in range(JOINT_MAXITER):
             run = alive & ~done
             if not run.any():
                 break
             e0 = evaluate(branch, x, k, loc, ctx)
-            J = _jacobian(branch, x, k, loc, ctx, e0)
+            J = _jacobian(branch, x, k, loc, ctx, e0, fd)
             Rx, Gx, Rk, Gk = (np.where(fresh, new, old) for new, old in zip(J, (Rx, Gx, Rk, Gk)))
             R, G = e0["J0"] - target, e0["d"] - d_fix
             det = Rx * Gk - Rk * Gx
@@ -334,7 +343,8 @@ def _joint_newton(branch, loc, ctx, d_fix, k0, x0):
             dx = np.where(exact, 0.0, -(R * Gk - Rk * G) / det)
             dk = np.where(exact, 0.0, -(Rx * G - R * Gx) / det)
             size = np.maximum(np.abs(dx) / (1.0 + np.abs(x)), np.abs(dk) / (1.0 + np.abs(k)))
-            small = _converged(chord, size, prev)
+            # the Newton stopping rule holds only for a step with the exact Jacobian
+            small = _converged(fresh & (not fd), size, prev)
             x = np.where(run, x + dx, x)
             k = np.where(run, k + dk, k)
             done |= run & (exact | small)

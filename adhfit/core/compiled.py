@@ -439,19 +439,21 @@ def _stop(fresh, size, prev):
 
 
 @_jit
-def _jacobian(code, x, kappa, loc, c, w, a_m, s0):
+def _jacobian(code, x, kappa, loc, c, w, a_m, s0, fd):
     """d(J0, d)/d(x, kappa) at a real state ``s0`` (its ``_state``): (Rx, Gx, Rk, Gk).
 
     Forward differences with steps FD_STEP (1 + |x|) and FD_STEP (1 + |kappa|): two real
     evaluations, good to ~1e-8 relative, which only sets how fast the joint Newton converges (its
-    residuals are exact). Where a perturbed state is outside the model, two complex steps instead.
+    residuals are exact). Two complex steps (exact) where a perturbed state is outside the model,
+    or when ``fd`` is False.
     """
-    hx, hk = FD_STEP * (1.0 + abs(x)), FD_STEP * (1.0 + abs(kappa))
-    sx = _state(code, x + hx, kappa, loc, c, w, a_m, True)
-    sk = _state(code, x, kappa + hk, loc, c, w, a_m, True)
-    if sx[6] and sk[6]:
-        return ((sx[5] - s0[5]) / hx, (sx[2] - s0[2]) / hx, (sk[5] - s0[5]) / hk,
-                (sk[2] - s0[2]) / hk)
+    if fd:
+        hx, hk = FD_STEP * (1.0 + abs(x)), FD_STEP * (1.0 + abs(kappa))
+        sx = _state(code, x + hx, kappa, loc, c, w, a_m, True)
+        sk = _state(code, x, kappa + hk, loc, c, w, a_m, True)
+        if sx[6] and sk[6]:
+            return ((sx[5] - s0[5]) / hx, (sx[2] - s0[2]) / hx, (sk[5] - s0[5]) / hk,
+                    (sk[2] - s0[2]) / hk)
     lc = complex(loc, 0.0)
     s1 = _state(code, complex(x, STEP), complex(kappa, 0.0), lc, c, w, a_m, True)
     s2 = _state(code, complex(x, 0.0), complex(kappa, STEP), lc, c, w, a_m, True)
@@ -459,16 +461,16 @@ def _jacobian(code, x, kappa, loc, c, w, a_m, s0):
 
 
 @_jit
-def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x):
+def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
     """branches._joint_newton for one row: (x, kappa, converged).
 
     Newton on the pair (material condition, gap) in (x, kappa) from a predictor. The first
-    iteration takes the 2x2 Jacobian (:func:`_jacobian`); later ones reuse it (chord steps, one real
+    iteration takes the 2x2 Jacobian (:func:`_jacobian`, by differences if ``fd``); later ones reuse it (chord steps, one real
     evaluation each) while each step is below CHORD_RATE times the one before, and take a fresh
     Jacobian otherwise. It stops when the error left, estimated from the observed rate of
-    convergence, is below XTOL (:func:`_stop`, chord rule). No safeguard: a non-finite or
-    inadmissible iterate, a singular Jacobian, no convergence in JOINT_MAXITER or a root outside x's
-    bracket is a failure.
+    convergence, is below XTOL (:func:`_stop`; the Newton rule only with the exact Jacobian).
+    No safeguard: a non-finite or inadmissible iterate, a singular Jacobian, no convergence in
+    JOINT_MAXITER or a root outside x's bracket is a failure.
     """
     tgt = _target(code, complex(loc, 0.0), c, a_m, L_m).real
     Rx = Gx = Rk = Gk = det = 0.0
@@ -480,7 +482,7 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x):
             return math.nan, math.nan, False
         R, G = s0[5] - tgt, s0[2] - d_fix
         if fresh:
-            Rx, Gx, Rk, Gk = _jacobian(code, x, kappa, loc, c, w, a_m, s0)
+            Rx, Gx, Rk, Gk = _jacobian(code, x, kappa, loc, c, w, a_m, s0, fd)
             det = Rx * Gk - Rk * Gx
         if not (math.isfinite(R) and math.isfinite(G) and math.isfinite(det)) or det == 0:
             return math.nan, math.nan, False
@@ -490,7 +492,7 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x):
         size = max(abs(dx) / (1.0 + abs(x)), abs(dk) / (1.0 + abs(kappa)))
         if not exact:
             x, kappa = x + dx, kappa + dk
-        if exact or _stop(False, size, prev):
+        if exact or _stop(fresh and not fd, size, prev):
             lo, hi = _bracket(code, loc, c, w, a_m)
             return x, kappa, min(lo, hi) <= x <= max(lo, hi)
         fresh = not (size <= CHORD_RATE * prev)
@@ -531,7 +533,8 @@ def _gap_from(code, loc, c, w, a_m, d_fix, kappa, lo, hi):
 def _pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
     """branches.solve_state under pressure control for one row: (x, kappa, status).
 
-    An implicit row with a finite predictor x0 is first solved by :func:`_joint_one`, an explicit
+    An implicit row with a finite predictor x0 is first solved by :func:`_joint_one` (Jacobian by
+    differences, then exact), an explicit
     row by :func:`_gap_from`. Otherwise (or when that fails): unbracketed Newton on kappa for the
     gap; each iterate re-solves the unknown (from the last finite inner solution) and carries its
     derivative through that solve by :func:`_propagate`; an iterate without inner solution gives
@@ -539,9 +542,12 @@ def _pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
     """
     implicit = _implicit(code)
     if implicit and has_x0 and math.isfinite(x0) and math.isfinite(kappa):
-        xj, kj, good = _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0)
-        if good:
-            return xj, kj, OK
+        # differences first; next to a fold (det -> 0) their ~1e-8 error can stall the iteration,
+        # and the exact Jacobian is tried before the nested solve
+        for fd in (True, False):
+            xj, kj, good = _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, fd)
+            if good:
+                return xj, kj, OK
     if not implicit and math.isfinite(kappa):
         kj, good = _gap_from(code, loc, c, w, a_m, d_fix, kappa, -math.inf, math.inf)
         if good:
