@@ -363,6 +363,19 @@ def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
 
 
 @_jit
+def _damped_step(x, last_good, r, dr):
+    """One step of solve.newton without a bracket: (next x, last good x, converged).
+
+    A Newton step from a finite residual and derivative; otherwise halfway back toward the last
+    good iterate. Converged on an exact zero or a step below XTOL (1 + |x|).
+    """
+    if math.isfinite(r) and math.isfinite(dr) and dr != 0:
+        step = -r / dr
+        return x + step, x, r == 0 or abs(step) <= XTOL * (1.0 + abs(x))
+    return 0.5 * (x + last_good), last_good, False
+
+
+@_jit
 def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
     """solve.newton without a bracket for one row: (x, status); NaN when it does not converge.
 
@@ -372,17 +385,7 @@ def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
     x = last_good = x0
     for _ in range(MAXITER):
         z = _residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
-        r, dr = z.real, z.imag / STEP
-        good = math.isfinite(r) and math.isfinite(dr) and dr != 0
-        if good:
-            last_good = x
-            step = -r / dr
-            xn = x + step
-        else:
-            step = 0.0
-            xn = 0.5 * (x + last_good)
-        done = good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(x)))
-        x = xn
+        x, last_good, done = _damped_step(x, last_good, z.real, z.imag / STEP)
         if done:
             return x, OK
     return math.nan, FAIL_INNER
@@ -566,17 +569,7 @@ def _pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
         xc = _propagate(code, xi, kappa, kc, lc, c, w, a_m, L_m) if implicit else 0j
         sg = _state(code, xc, kc, lc, c, w, a_m, True)
         g = sg[2] - d_fix if sg[6] else complex(math.nan, math.nan)
-        r, dr = g.real, g.imag / STEP
-        good = math.isfinite(r) and math.isfinite(dr) and dr != 0
-        if good:
-            last_good = kappa
-            step = -r / dr
-            kn = kappa + step
-        else:
-            step = 0.0
-            kn = 0.5 * (kappa + last_good)
-        converged = good and (r == 0 or abs(step) <= XTOL * (1.0 + abs(kappa)))
-        kappa = kn
+        kappa, last_good, converged = _damped_step(kappa, last_good, g.real, g.imag / STEP)
         if converged:
             break
     if not converged:
