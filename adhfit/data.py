@@ -1,20 +1,23 @@
-"""Measured force curves: CSV (DESIGN.md A4) -> a read-only :class:`Curve` in SI units.
+"""Measured force curves (DESIGN.md A4, A4b) -> a read-only :class:`Curve` in SI units.
 
-Headers are ``name [unit]`` with any unit pint understands.  Displacement control needs
-``displacement`` (a length: δ up to an offset, pressing in positive) and ``force`` (compressive
-positive); pressure control needs ``pressure`` and ``force``; ``time`` and ``contact_radius`` are
-optional.  Rows are in measured order: loading, then unloading, possibly past pull-off.
+Clean files have ``name [unit]`` headers (any unit pint understands).  Files as instruments write
+them are read too, without flags wherever they are unambiguous (:mod:`adhfit.readers`): metadata
+lines above the header, units in ``[ ]``, ``( )`` or a units row, quoted cells, ``,`` ``;`` or tab
+separators, decimal commas, a UTF-8 byte-order mark, LabVIEW ``.lvm`` files, and the usual column
+names (``Load``, ``Extension``, ``Position``, ...).  Displacement control needs a displacement (a
+length: δ up to an offset, pressing in positive) and a force (compressive positive); pressure
+control needs a pressure and a force; time and contact radius are optional.  Rows are in measured
+order: loading, then unloading, possibly past pull-off.
 
-Nothing is dropped silently: blank and ``#`` comment lines are skipped and listed in
-:attr:`Curve.excluded`; any other row that cannot be used is an error naming file, line and column.
+Nothing is dropped silently: blank, comment and metadata lines and a units row are listed in
+:attr:`Curve.excluded`, unused columns in :attr:`Curve.ignored_columns`; any other row that cannot be
+used is an error naming file, line and column.
 """
 from __future__ import annotations
 
 import csv
-import difflib
 import hashlib
 import io
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -24,22 +27,14 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataError, InputError
-from .units import DIMENSIONS, unit_factor
+from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, assign, check_overrides, split_cell
+from .readers.text import Layout, detect_layout, read_lines, split_line
 
-__all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS"]
+__all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
 
-#: Known columns -> physical dimension (a key of adhfit.units.DIMENSIONS).
-COLUMNS: dict[str, str] = {"displacement": "length", "pressure": "pressure", "force": "force",
-                           "time": "time", "contact_radius": "length"}
-#: Columns each control mode needs; ``time`` and ``contact_radius`` are optional for both.
-REQUIRED = {"displacement": ("displacement", "force"), "pressure": ("pressure", "force")}
-OPTIONAL = ("time", "contact_radius")
-_EXAMPLE = {"displacement": "displacement [um]", "pressure": "pressure [kPa]", "force": "force [mN]",
-            "time": "time [s]", "contact_radius": "contact_radius [um]"}
 #: Fewest data rows a curve may have (loading and unloading both need several points).
 MIN_ROWS = 10
 
-_HEADER = re.compile(r"^\s*([^\[\]]*?)\s*\[\s*([^\[\]]+?)\s*\]\s*$")
 
 
 def _readonly(a: Any, dtype: type = float) -> np.ndarray:
@@ -73,12 +68,20 @@ class Curve:
         Row index of the end of loading: the first occurrence of the largest control value, found
         by row order (never by value ranges: rows either side of a pull-off jump may share a value).
     excluded : tuple of (int, str)
-        Lines left out, with the reason (blank lines, comment lines).
+        Lines left out, with the reason: ``"blank line"``, ``"comment line"``, ``"metadata above the
+        header"``, ``"units row"``, ``"LabVIEW header"``.
     sha256 : str
         Hash of the file's bytes, for reports.
     units : mapping
         Column name -> unit as written in the file (e.g. ``{"force": "mN"}``), for plots in the
         user's units.
+    ignored_columns : tuple of (str, str)
+        Header cells of the columns not used (temperature, cycle, ...), with the reason.
+    columns : mapping
+        Column name -> header cell as written in the file (e.g. ``{"force": "Load (N)"}``).
+    layout : str
+        How the file was read, for reports (e.g. ``"tab-separated, 7 metadata line(s), units row"``),
+        with any sign override.
 
     All arrays are read-only copies of equal length.
     """
@@ -94,6 +97,9 @@ class Curve:
     excluded: tuple[tuple[int, str], ...] = ()
     sha256: str = ""
     units: Mapping[str, str] = field(default_factory=dict)
+    ignored_columns: tuple[tuple[str, str], ...] = ()
+    columns: Mapping[str, str] = field(default_factory=dict)
+    layout: str = ""
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -113,6 +119,8 @@ class Curve:
         set_(self, "i_turn", int(self.i_turn))
         set_(self, "excluded", tuple((int(a), str(b)) for a, b in self.excluded))
         set_(self, "units", MappingProxyType(dict(self.units)))
+        set_(self, "ignored_columns", tuple((str(a), str(b)) for a, b in self.ignored_columns))
+        set_(self, "columns", MappingProxyType(dict(self.columns)))
 
     def __len__(self) -> int:
         return len(self.x)
@@ -155,174 +163,136 @@ class Curve:
         return pd.DataFrame(cols)
 
 
-def read_curve(path: str | Path, control: str) -> Curve:
-    """Read a measured curve (CSV, DESIGN.md A4).
+def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | None = None,
+               units: Mapping[str, str] | None = None, force_sign: str | None = None,
+               displacement_sign: str | None = None) -> Curve:
+    """Read a measured curve (DESIGN.md A4, A4b).
 
     Parameters
     ----------
     path : str or Path
-        CSV file; separator ``,`` (``;`` or tab also recognised from the header line); UTF-8.
+        Text file: CSV (``,`` ``;`` or tab, decimal point or comma, UTF-8 with or without BOM,
+        UTF-16 with BOM, Latin-1), an instrument export with metadata and a units row, or a LabVIEW
+        ``.lvm`` file.
     control : {"displacement", "pressure"}
         The test's control mode, which decides the required columns.
+    columns : mapping, optional
+        Column name -> header name, e.g. ``{"force": "Load 2"}``, where the names do not tell.
+    units : mapping, optional
+        Column name -> unit, e.g. ``{"displacement": "mm"}``; overrides the file's.
+    force_sign : {"compressive-positive", "tensile-positive"}, optional
+        The file's force sign convention (default compressive-positive, adhfit's).
+    displacement_sign : {"into-substrate-positive", "away-positive"}, optional
+        The file's displacement sign convention (default into-substrate-positive, adhfit's).
 
     Returns
     -------
     Curve
-        Values converted to SI; blank and comment lines listed in ``excluded``.
+        Values converted to SI; lines left out listed in ``excluded``, unused columns in
+        ``ignored_columns``.
 
     Raises
     ------
     DataError
-        Naming the file and, where it applies, the line and column: unreadable or empty file,
-        header without ``[unit]``, unknown, duplicate or missing column (with the columns found and
-        expected), unit of the wrong dimension, wrong number of cells, empty, non-numeric or
-        non-finite cell, fewer than :data:`MIN_ROWS` rows, time running backwards, negative contact
-        radius, no loading or no unloading stage.
+        Naming the file and, where it applies, the line and column: unreadable or empty file, no
+        header, a column without a unit, unknown, duplicate or missing column (with the columns found
+        and expected, and the flag that settles it), unit of the wrong dimension, wrong number of
+        cells, empty, non-numeric or non-finite cell, fewer than :data:`MIN_ROWS` rows, time running
+        backwards, negative contact radius, no loading or no unloading stage.
+    InputError
+        For a bad ``control`` or override.
     """
     if control not in REQUIRED:
         raise InputError("control", control, "one of 'displacement', 'pressure'")
+    check_overrides(control, columns, units, force_sign, displacement_sign)
     where = str(path)
-    raw, lines = _read_lines(path, where)
-    header_no, rows, excluded = _classify(lines, where)
-    header = lines[header_no - 1]
-    sep = next((s for s in (",", ";", "\t") if s in header), ",")
-    names, factors, units = _parse_header(header, sep, control, where, header_no)
-    table = _table(lines, header, rows, sep, names, where)
-    if len(rows) < MIN_ROWS:
-        raise DataError(f"only {len(rows)} data rows; at least {MIN_ROWS} are needed (loading, then "
+    raw, lines, encoding = read_lines(path, where)
+    layout = detect_layout(lines, where, lvm=Path(path).suffix.lower() == ".lvm")
+    header = split_line(lines[layout.header_no - 1], layout.sep)
+    spec = assign(header, control, where=where, header_no=layout.header_no,
+                  units_row=None if layout.units_no is None else split_line(lines[layout.units_no - 1], layout.sep),
+                  units_no=layout.units_no, file_units=layout.units, time_columns=layout.time_columns,
+                  columns=columns, units=units)
+    table = _table(lines, layout, header, spec, where)
+    if len(layout.rows) < MIN_ROWS:
+        raise DataError(f"only {len(layout.rows)} data rows; at least {MIN_ROWS} are needed (loading, then "
                         "unloading)", path=where)
-
-    line_no = np.array(rows, dtype=int)
-    headers = _cells(header, sep)
-    values, bad = {}, []
-    for j, name in enumerate(names):
-        values[name], col_bad = _numbers(table.iloc[:, j])
-        bad += [(i, j, table.iloc[i, j]) for i in col_bad]
-    if bad:
-        i, j, cell = min(bad)
-        more = f" ({len(bad) - 1} more bad cells in the file)" if len(bad) > 1 else ""
-        raise DataError(_describe(cell) + more, path=where, column=headers[j], line=int(line_no[i]))
-    values = {name: v * factors[name] for name, v in values.items()}
+    line_no = np.array(layout.rows, dtype=int)
+    values = _values(table, spec, line_no, layout.decimal, where)
+    signs = {"force": force_sign == "tensile-positive", control: displacement_sign == "away-positive"}
+    values = {k: -v if signs.get(k) else v for k, v in values.items()}
     x = values[control]
-    _check_physics(values, line_no, headers, names, control, where)
+    _check_physics(values, line_no, spec.header, control, where)
+    notes = [layout.description, encoding] + [f"{k.replace('_', ' ')} {v}" for k, v in
+                                             (("force_sign", force_sign), ("displacement_sign", displacement_sign)) if v]
     return Curve(path=where, control=control, x=x, force=values["force"], line=line_no,
                  i_turn=int(np.argmax(x)), time=values.get("time"),
-                 contact_radius=values.get("contact_radius"), excluded=tuple(excluded),
-                 sha256=hashlib.sha256(raw).hexdigest(), units=units)
+                 contact_radius=values.get("contact_radius"), excluded=tuple(sorted(layout.excluded)),
+                 sha256=hashlib.sha256(raw).hexdigest(), units=spec.units, ignored_columns=tuple(spec.ignored),
+                 columns=spec.header, layout=", ".join(n for n in notes if n))
 
 
-def _read_lines(path: str | Path, where: str) -> tuple[bytes, list[str]]:
-    """The file's bytes and its lines (any line ending; line n is ``lines[n - 1]``)."""
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise DataError(f"cannot read the file ({exc.strerror or exc})", path=where) from None
-    if not raw.strip():
-        raise DataError("the file is empty", path=where)
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")  # every byte maps: a non-UTF-8 'µ' must not stop a read
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    if lines and lines[-1] == "":
-        lines.pop()
-    return raw, lines
+def _table(lines: list[str], layout: Layout, header: list[str], spec: Assignment, where: str) -> pd.DataFrame:
+    """The data rows as strings, one per line in ``layout.rows``; a row of the wrong shape is an error.
 
-
-def _classify(lines: list[str], where: str) -> tuple[int, list[int], list[tuple[int, str]]]:
-    """Header line number, data line numbers, and the (line, reason) of blank and comment lines."""
-    excluded: list[tuple[int, str]] = []
-    header_no, rows = None, []
-    for no, line in enumerate(lines, start=1):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("#"):
-            excluded.append((no, "blank line" if not stripped else "comment line"))
-        elif header_no is None:
-            header_no = no
-        else:
-            rows.append(no)
-    if header_no is None:
-        raise DataError("the file has no header line (only blank or comment lines)", path=where)
-    return header_no, rows, excluded
-
-
-def _table(lines: list[str], header: str, rows: list[int], sep: str, names: list[str], where: str
-           ) -> pd.DataFrame:
-    """The data rows as strings, one per line in ``rows``; a row of the wrong shape is an error."""
-    for no in rows:
-        if lines[no - 1].count('"') % 2:  # a quoted cell spanning lines would shift every line number
+    A row may be short only by trailing columns that are not used (e.g. LabVIEW's empty Comment).
+    """
+    n, sep = len(header), layout.sep
+    need = max(spec.index.values()) + 1
+    body = [sep.join(f'"{h}"' if sep in h else h for h in header)]
+    for no in layout.rows:
+        line = lines[no - 1]
+        if line.count('"') % 2:  # a quoted cell spanning lines would shift every line number
             raise DataError("unbalanced quote (cells spanning several lines are not supported)",
                             path=where, line=no)
-        cells = next(csv.reader([lines[no - 1]], delimiter=sep))
-        if len(cells) != len(names):
-            raise DataError(f"{len(cells)} cells, but the header has {len(names)} columns "
-                            f"({', '.join(names)})", path=where, line=no)
-    body = "\n".join([header] + [lines[no - 1] for no in rows])
+        cells = next(csv.reader([line], delimiter=sep), [])
+        if len(cells) > n or len(cells) < need:
+            role = {j: r for r, j in spec.index.items()}
+            names = ", ".join(role.get(j) or split_cell(h)[0] or f"column {j + 1}" for j, h in enumerate(header))
+            raise DataError(f"{len(cells)} cells, but the header has {n} columns ({names})", path=where, line=no)
+        body.append(line + sep * (n - len(cells)))
     try:
-        table = pd.read_csv(io.StringIO(body), sep=sep, dtype=str, keep_default_na=False, na_filter=False,
-                            index_col=False, skip_blank_lines=False)
+        table = pd.read_csv(io.StringIO("\n".join(body)), sep=sep, dtype=str, keep_default_na=False,
+                            na_filter=False, index_col=False, skip_blank_lines=False, header=0,
+                            names=[f"c{j}" for j in range(n)])
     except (pd.errors.ParserError, ValueError) as exc:  # the checks above should leave none
         raise DataError(f"cannot parse the table ({exc})", path=where) from None
-    if len(table) != len(rows):
-        raise DataError(f"read {len(table)} rows from {len(rows)} data lines", path=where)
+    if len(table) != len(layout.rows):
+        raise DataError(f"read {len(table)} rows from {len(layout.rows)} data lines", path=where)
     return table
 
 
-def _cells(line: str, sep: str) -> list[str]:
-    return [c.strip() for c in next(csv.reader([line], delimiter=sep))]
+def _values(table: pd.DataFrame, spec: Assignment, line_no: np.ndarray, decimal: str, where: str
+            ) -> dict[str, np.ndarray]:
+    """The used columns as floats in SI; the first bad cell in file order is an error."""
+    values, bad = {}, []
+    for name, j in spec.index.items():
+        values[name], col_bad = _numbers(table.iloc[:, j], decimal)
+        bad += [(i, j, name) for i in col_bad]
+    if bad:
+        i, j, name = min(bad)
+        more = f" ({len(bad) - 1} more bad cells in the file)" if len(bad) > 1 else ""
+        raise DataError(_describe(table.iloc[i, j], decimal) + more, path=where, column=spec.header[name],
+                        line=int(line_no[i]))
+    return {name: v * spec.factors[name] for name, v in values.items()}
 
-
-def _parse_header(header: str, sep: str, control: str, where: str, no: int
-                  ) -> tuple[list[str], dict[str, float], dict[str, str]]:
-    """Column names, SI factors and units from the header line; every header problem is an error."""
-    cells = _cells(header, sep)
-    expected = [_EXAMPLE[n] for n in REQUIRED[control]]
-    optional = [_EXAMPLE[n] for n in OPTIONAL]
-    tail = (f"found {', '.join(repr(c) for c in cells)}; expected {', '.join(map(repr, expected))} "
-            f"(optional: {', '.join(map(repr, optional))})")
-    names: list[str] = []
-    factors: dict[str, float] = {}
-    units: dict[str, str] = {}
-    for cell in cells:
-        m = _HEADER.match(cell)
-        if m is None or not m.group(1):
-            raise DataError(f"bad header '{cell}': columns must be written 'name [unit]', e.g. 'force [mN]'",
-                            path=where, column=cell, line=no)
-        name, unit = m.group(1).lower(), m.group(2)
-        usable = [*REQUIRED[control], *OPTIONAL]
-        if name not in usable:
-            other = "" if name not in COLUMNS else f" (it belongs to control = '{name}', not '{control}')"
-            close = difflib.get_close_matches(name, usable, n=1, cutoff=0.6)
-            hint = f" did you mean '{close[0]}'?" if close else ""
-            raise DataError(f"unknown column{other};{hint} {tail}", path=where, column=cell, line=no)
-        if name in names:
-            raise DataError(f"duplicate column '{name}'; {tail}", path=where, column=cell, line=no)
-        try:
-            factors[name] = unit_factor(unit, COLUMNS[name], name=cell)
-        except InputError as exc:
-            raise DataError(exc.reason, path=where, column=cell, line=no) from None
-        names.append(name)
-        units[name] = unit
-    for name in REQUIRED[control]:
-        if name not in names:
-            noun = DIMENSIONS[COLUMNS[name]][1].split(" ", 1)[1]
-            raise DataError(f"missing column '{_EXAMPLE[name]}' (any {noun} unit) for control = '{control}'; "
-                            f"{tail}", path=where, line=no)
-    return names, factors, units
-
-
-def _numbers(column: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+def _numbers(column: pd.Series, decimal: str = ".") -> tuple[np.ndarray, np.ndarray]:
     """Cells of one column as floats, and the row indices of cells that are not finite numbers."""
-    values = pd.to_numeric(column.str.strip(), errors="coerce").to_numpy(dtype=float)
+    cells = column.str.strip()
+    if decimal == ",":  # a '.' in a decimal-comma file is a thousands mark or a typo: not a number
+        cells = cells.where(~cells.str.contains(".", regex=False), "x").str.replace(",", ".", regex=False)
+    values = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
     return values, np.flatnonzero(~np.isfinite(values))
 
 
-def _describe(cell: str) -> str:
+def _describe(cell: str, decimal: str = ".") -> str:
     """Why a cell is not usable."""
     if not cell.strip():
         return "empty cell"
+    if decimal == "," and "." in cell:
+        return f"{cell!r} is not a number (this file writes decimal commas)"
     try:
-        value = float(cell)
+        value = float(cell.replace(",", ".") if decimal == "," else cell)
     except ValueError:
         return f"{cell!r} is not a number" + (" (use a decimal point)" if "," in cell else "")
     if np.isfinite(value):
@@ -330,10 +300,9 @@ def _describe(cell: str) -> str:
     return f"{cell!r} is not a finite number (NaN and inf are not data)"
 
 
-def _check_physics(values: dict[str, np.ndarray], line_no: np.ndarray, headers: list[str], names: list[str],
-                   control: str, where: str) -> None:
+def _check_physics(values: dict[str, np.ndarray], line_no: np.ndarray, col: Mapping[str, str], control: str,
+                   where: str) -> None:
     """Row-order checks: time runs forward, radii are not negative, loading and unloading exist."""
-    col = dict(zip(names, headers))
     if "time" in values:
         back = np.flatnonzero(np.diff(values["time"]) < 0)
         if back.size:
@@ -351,5 +320,7 @@ def _check_physics(values: dict[str, np.ndarray], line_no: np.ndarray, headers: 
         raise DataError(f"no unloading: {largest} is not followed by any smaller value; rows must be "
                         "loading, then unloading", path=where, column=col[control], line=int(line_no[-1]))
     if i_turn == 0:
-        raise DataError(f"no loading: {largest} is the first row; rows must be loading, then unloading",
+        hint = ("; if the file counts displacement away from the substrate as positive, give "
+                "--displacement-sign away-positive") if control == "displacement" else ""
+        raise DataError(f"no loading: {largest} is the first row; rows must be loading, then unloading{hint}",
                         path=where, column=col[control], line=int(line_no[0]))
