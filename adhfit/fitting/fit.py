@@ -28,12 +28,12 @@ SIGMA_ESTIMATED = "estimated from the residuals (lmfit scales the covariance by 
 _W_EDGE = 0.98
 
 
-def _inputs(data, scene):
+def _inputs(data, scene, read_options=None):
     from ..data import read_curve  # noqa: PLC0415
     from ..scene import Scene, load_scene  # noqa: PLC0415
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
-    curve = read_curve(data, scene.control) if isinstance(data, (str, Path)) else data
+    curve = read_curve(data, scene.control, **(read_options or {})) if isinstance(data, (str, Path)) else data
     if curve.control != scene.control:
         raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
     return curve, scene
@@ -102,7 +102,7 @@ def _provenance(curve, scene, seed, method, options) -> dict:
 
 def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
               fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
-              points: int = DEFAULT_POINTS, profile: bool = True) -> FitResult:
+              points: int = DEFAULT_POINTS, profile: bool = True, read_options: dict | None = None) -> FitResult:
     """Fit W_ad, μh and the slip condition to a measured curve.
 
     Parameters
@@ -128,13 +128,16 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     profile : bool
         Compute likelihood-profile intervals of W_ad and μh of the reported fit; the other fit's
         intervals are from its covariance (an undecided verdict reports the hull of both).
+    read_options : dict, optional
+        Keywords for :func:`adhfit.data.read_curve` when ``data`` is a path: ``columns``, ``units``,
+        ``force_sign``, ``displacement_sign``.
 
     Returns
     -------
     FitResult
     """
     t0 = time.perf_counter()
-    curve, scene = _inputs(data, scene)
+    curve, scene = _inputs(data, scene, read_options)
     slip = scene.slip if slip is None else slip
     _check_options(method, slip, sigma, points)
     slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
