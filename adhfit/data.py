@@ -316,11 +316,11 @@ def _check_physics(values: dict[str, np.ndarray], line_no: np.ndarray, col: Mapp
     x = values[control]
     i_turn = int(np.argmax(x))
     largest = f"the largest {control} (line {line_no[i_turn]})"
+    hint = ("; if the file counts displacement away from the substrate as positive, give "
+            "--displacement-sign away-positive") if control == "displacement" else ""
     if np.all(x[i_turn:] == x[i_turn]):
         raise DataError(f"no unloading: {largest} is not followed by any smaller value; rows must be "
-                        "loading, then unloading", path=where, column=col[control], line=int(line_no[-1]))
+                        f"loading, then unloading{hint}", path=where, column=col[control], line=int(line_no[-1]))
     if i_turn == 0:
-        hint = ("; if the file counts displacement away from the substrate as positive, give "
-                "--displacement-sign away-positive") if control == "displacement" else ""
         raise DataError(f"no loading: {largest} is the first row; rows must be loading, then unloading{hint}",
                         path=where, column=col[control], line=int(line_no[0]))
