@@ -223,7 +223,7 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
     values = {k: -v if signs.get(k) else v for k, v in values.items()}
     x = values[control]
     _check_physics(values, line_no, spec.header, control, where)
-    notes = [layout.description, encoding] + [f"{k.replace('_', ' ')} {v}" for k, v in
+    notes = [layout.description, encoding, *spec.inferred.values()] + [f"{k.replace('_', ' ')} {v}" for k, v in
                                              (("force_sign", force_sign), ("displacement_sign", displacement_sign)) if v]
     return Curve(path=where, control=control, x=x, force=values["force"], line=line_no,
                  i_turn=int(np.argmax(x)), time=values.get("time"),
@@ -266,8 +266,15 @@ def _values(table: pd.DataFrame, spec: Assignment, line_no: np.ndarray, decimal:
             ) -> dict[str, np.ndarray]:
     """The used columns as floats in SI; the first bad cell in file order is an error."""
     values, bad = {}, []
-    for name, j in spec.index.items():
+    for name, j in list(spec.index.items()):
         values[name], col_bad = _numbers(table.iloc[:, j], decimal)
+        if name == "time" and col_bad.size:  # optional: a clock-time column is left out, not an error
+            i = int(col_bad[0])
+            spec.ignored.append((spec.header[name], f"time not a number (line {line_no[i]}: "
+                                                    f"{table.iloc[i, j]!r})"))
+            for d in (values, spec.index, spec.header, spec.units, spec.factors):
+                d.pop(name)
+            continue
         bad += [(i, j, name) for i in col_bad]
     if bad:
         i, j, name = min(bad)

@@ -28,14 +28,19 @@ REQUIRED = {"displacement": ("displacement", "force"), "pressure": ("pressure", 
 OPTIONAL = ("time", "contact_radius")
 EXAMPLE = {"displacement": "displacement [um]", "pressure": "pressure [kPa]", "force": "force [mN]",
            "time": "time [s]", "contact_radius": "contact_radius [um]"}
-#: Header names (compared in lower case, ``_``/``-`` as spaces, without a leading "axial") per column.
+#: Header names (compared in lower case, ``_``/``-`` as spaces, without a leading "axial" or
+#: "compressive") per column.
 ALIASES: dict[str, tuple[str, ...]] = {
     "force": ("force", "load", "standard force"),
-    "displacement": ("displacement", "extension", "position", "crosshead", "deflection"),
+    "displacement": ("displacement", "extension", "position", "crosshead", "deflection",
+                     "crosshead position", "crosshead displacement"),
     "pressure": ("pressure",),
-    "time": ("time",),
+    "time": ("time", "test time", "running time", "elapsed time", "total time"),
     "contact_radius": ("contact radius",),
 }
+_PREFIXES = ("axial ", "compressive ")
+#: LabVIEW's names for channels nobody named: their quantity is read from Y_Unit_Label's units.
+_GENERIC = re.compile(r"^(untitled( \d+)?|voltage( \d+)?|(dev\d+/)?ai\d+|channel ?\d*)$")
 _ROLE = {alias: role for role, names in ALIASES.items() for alias in names}
 _CELL = re.compile(r"^(.*?)\s*[\[(]\s*([^\[\]()]*?)\s*[\])]\s*$")
 
@@ -51,7 +56,9 @@ def split_cell(cell: str) -> tuple[str, str | None]:
 def normalise(name: str) -> str:
     """Lower case, ``_``/``-`` as spaces, single spaces, no leading ``axial``."""
     text = " ".join(re.sub(r"[_\-]", " ", name).lower().split())
-    return text[6:] if text.startswith("axial ") else text
+    for prefix in _PREFIXES:
+        text = text[len(prefix):] if text.startswith(prefix) else text
+    return text
 
 
 def role_of(name: str) -> str | None:
@@ -104,6 +111,8 @@ class Assignment:
         adhfit column -> factor to SI.
     ignored : list of (str, str)
         Header cells not used, with the reason.
+    inferred : dict
+        adhfit column -> how it was found from its unit (a generic LabVIEW channel name).
     """
 
     index: dict[str, int] = field(default_factory=dict)
@@ -111,6 +120,7 @@ class Assignment:
     units: dict[str, str] = field(default_factory=dict)
     factors: dict[str, float] = field(default_factory=dict)
     ignored: list[tuple[str, str]] = field(default_factory=list)
+    inferred: dict[str, str] = field(default_factory=dict)
 
 
 def _tail(cells: list[str], control: str) -> str:
@@ -142,20 +152,29 @@ def assign(cells: list[str], control: str, *, where: str, header_no: int, units_
         raise DataError("--columns names one column for two quantities: "
                         + ", ".join(f"{r}={(columns or {})[r]}" for r in forced), path=where, line=header_no)
     usable = (*REQUIRED[control], *OPTIONAL)
-    out, chosen, other = Assignment(), {}, []
+    out, chosen, other, generic = Assignment(), {}, [], []
     for j, cell in enumerate(cells):
         name = split_cell(cell)[0]
-        role = by_index.get(j) or role_of(name) or ("time" if name in time_columns else None)
+        from_x = j not in by_index and not role_of(name) and name in time_columns
+        role = by_index.get(j) or role_of(name) or ("time" if from_x else None)
         if j not in by_index and role in forced:
             out.ignored.append((cell, f"another {role} column (--columns {role}= chose "
                                       f"'{cells[forced[role]]}')"))
+        elif from_x and "time" in chosen:
+            out.ignored.append((cell, "another X_Value column (the first one is time)"))
         elif role is None:
             out.ignored.append((cell or f"column {j + 1}", "not a column adhfit reads" if name else "no name"))
+            generic += [j] if _GENERIC.match(normalise(name)) else []
         elif role not in usable:
             out.ignored.append((cell, f"a {role} column, not used under {control} control"))
             other.append(j)
         else:
             chosen.setdefault(role, []).append(j)
+    raw = {j: _raw_unit(j, cells, units_row, file_units)[0] for j in generic}
+    for role, j in _by_unit(chosen, generic, raw, control, cells, where, header_no).items():
+        chosen[role] = [j]
+        out.ignored.remove((cells[j], "not a column adhfit reads"))
+        out.inferred[role] = f"'{cells[j]}' read as {role} from its unit {raw[j]}"
     for role, js in chosen.items():
         if len(js) > 1:
             names = " and ".join(repr(cells[j]) for j in js)
@@ -201,11 +220,8 @@ def _unit(out: Assignment, role: str, j: int, cells: list[str], units_row: list[
           where: str, no: int) -> None:
     """Record column ``j`` as ``role`` with its unit: override, header, units row, then file header."""
     cell = cells[j]
-    unit, line = split_cell(cell)[1], no
-    if unit is None and units_row is not None and j < len(units_row):
-        unit, line = _unit_cell(units_row[j]), units_no
-    if unit is None and file_units is not None and j < len(file_units):
-        unit = file_units[j]
+    unit, from_row = _raw_unit(j, cells, units_row, file_units)
+    line = units_no if from_row else no
     if units and role in units:
         out.factors[role] = unit_factor(units[role], COLUMNS[role], name=f"units {role}")
         unit = units[role]
@@ -221,5 +237,42 @@ def _unit(out: Assignment, role: str, j: int, cells: list[str], units_row: list[
         try:
             out.factors[role] = unit_factor(unit, COLUMNS[role], name=cell)
         except InputError as exc:
+            if role == "time":  # optional: a clock time ('hh:mm:ss') is left out and listed
+                out.ignored.append((cell, f"time in {unit!r}, not a unit of time"))
+                return
             raise DataError(exc.reason, path=where, column=cell, line=line) from None
     out.index[role], out.header[role], out.units[role] = j, cell, unit
+
+
+def _raw_unit(j: int, cells: list[str], units_row: list[str] | None, file_units: list[str | None] | None
+              ) -> tuple[str | None, bool]:
+    """Column ``j``'s unit from the header cell, else the units row (flag True), else the file header."""
+    unit = split_cell(cells[j])[1]
+    if unit is None and units_row is not None and j < len(units_row) and _unit_cell(units_row[j]):
+        return _unit_cell(units_row[j]), True
+    if unit is None and file_units is not None and j < len(file_units):
+        unit = file_units[j]
+    return unit, False
+
+
+def _by_unit(chosen: dict, generic: list[int], raw: dict[int, str | None], control: str, cells: list[str],
+             where: str, no: int) -> dict[str, int]:
+    """Required columns found among generically named channels (``Untitled``) by their unit alone."""
+    found = {}
+    for role in REQUIRED[control]:
+        if role in chosen:
+            continue
+        fits = []
+        for j in generic:
+            try:
+                unit_factor(raw[j] or "", COLUMNS[role], name=cells[j])
+                fits.append(j)
+            except InputError:
+                pass
+        if len(fits) > 1:
+            names = " and ".join(repr(cells[j]) for j in fits)
+            raise DataError(f"{names} both have {DIMENSIONS[COLUMNS[role]][1]} unit, so either could be the "
+                            f"{role}; choose one with --columns {role}=NAME", path=where, line=no)
+        if fits:
+            found[role] = fits[0]
+    return found

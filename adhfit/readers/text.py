@@ -104,23 +104,26 @@ def _skip(line: str) -> str | None:
 
 
 def _numeric(cells: list[str], decimal: str) -> bool:
+    """Two or more numbers, and numbers in most filled cells (a clock-time or note column may remain)."""
     filled = [c for c in cells if c]
-    return len(filled) >= 2 and all(is_number(c, decimal) for c in filled)
+    numbers = sum(is_number(c, decimal) for c in filled)
+    return numbers >= 2 and 2 * numbers > len(filled)
 
 
 def _sniff(lines: list[str]) -> tuple[str, str, int]:
-    """Separator, decimal mark and row width that make the most lines numeric."""
+    """Separator, decimal mark and row width that make the most lines numeric (all cells first)."""
     best: tuple = ()
     for order, sep in enumerate(_SEPARATORS):
         cells = [split_line(line, sep) if _skip(line) is None else [] for line in lines]
         for decimal in (".", ","):
             if sep == "," and decimal == ",":
                 continue
-            widths = Counter(len(c) for c in cells if _numeric(c, decimal))
-            if not widths:
+            rows = [c for c in cells if _numeric(c, decimal)]
+            if not rows:
                 continue
-            width, count = widths.most_common(1)[0]
-            key = (count, decimal == ".", -order)
+            width = Counter(len(c) for c in rows).most_common(1)[0][0]
+            full = sum(1 for c in rows if len(c) == width and all(is_number(x, decimal) for x in c if x))
+            key = (full, sum(1 for c in rows if len(c) == width), decimal == ".", -order)
             if not best or key > best[0]:
                 best = (key, sep, decimal, width)
     if not best:
