@@ -223,8 +223,9 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
     values = {k: -v if signs.get(k) else v for k, v in values.items()}
     x = values[control]
     _check_physics(values, line_no, spec.header, control, where)
-    notes = [layout.description, encoding, *spec.inferred.values()] + [f"{k.replace('_', ' ')} {v}" for k, v in
-                                             (("force_sign", force_sign), ("displacement_sign", displacement_sign)) if v]
+    signs_given = {"force sign": force_sign, "displacement sign": displacement_sign}
+    notes = [layout.description, encoding, *spec.inferred.values(),
+             *(f"{k} {v}" for k, v in signs_given.items() if v)]
     return Curve(path=where, control=control, x=x, force=values["force"], line=line_no,
                  i_turn=int(np.argmax(x)), time=values.get("time"),
                  contact_radius=values.get("contact_radius"), excluded=tuple(sorted(layout.excluded)),
