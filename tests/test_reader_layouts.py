@@ -86,7 +86,8 @@ def test_lvm_with_an_x_column_per_channel(tmp_path, clean):
 
 @pytest.mark.parametrize("header", ["Running Time (s)\tAxial Displacement (um)\tAxial Force (mN)",
                                     "Test time (s)\tCompressive extension (um)\tCompressive load (mN)",
-                                    "Elapsed_time (s)\tCrosshead_position (um)\tstandard-force (mN)"])
+                                    "Elapsed_time (s)\tCrosshead_position (um)\tstandard-force (mN)",
+                                    "Zeit (s)\tStandardweg (µm)\tStandardkraft (mN)"])
 def test_instrument_name_variants(tmp_path, clean, header):
     body = "\n".join("\t".join(r) for r in ROWS)
     c = read_curve(write(tmp_path, header + "\n" + body + "\n"), "displacement")

@@ -73,13 +73,13 @@ def test_no_unit_anywhere(tmp_path, clean):
 
 
 def test_no_force_column(tmp_path, clean):
-    path = table(tmp_path, "Zeit [s],Weg [um],Kraft [mN]")
+    path = table(tmp_path, "t [s],s [um],F [mN]")
     msg = refused(path)
     assert "missing column 'displacement [um]' (any length unit)" in msg
     assert "Extension, Position, Crosshead, Deflection" in msg and "--columns displacement=NAME" in msg
-    c = read_curve(path, "displacement", columns={"displacement": "Weg", "force": "Kraft"})
+    c = read_curve(path, "displacement", columns={"displacement": "s", "force": "F"})
     np.testing.assert_allclose(c.force, clean.force, rtol=1e-12)
-    assert c.ignored_columns == (("Zeit [s]", "not a column adhfit reads"),)
+    assert c.ignored_columns == (("t [s]", "not a column adhfit reads"),)
 
 
 def test_columns_override_names_a_missing_column(tmp_path):

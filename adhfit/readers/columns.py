@@ -31,11 +31,11 @@ EXAMPLE = {"displacement": "displacement [um]", "pressure": "pressure [kPa]", "f
 #: Header names (compared in lower case, ``_``/``-`` as spaces, without a leading "axial" or
 #: "compressive") per column.
 ALIASES: dict[str, tuple[str, ...]] = {
-    "force": ("force", "load", "standard force"),
+    "force": ("force", "load", "standard force", "kraft", "standardkraft"),
     "displacement": ("displacement", "extension", "position", "crosshead", "deflection",
-                     "crosshead position", "crosshead displacement"),
-    "pressure": ("pressure",),
-    "time": ("time", "test time", "running time", "elapsed time", "total time"),
+                     "crosshead position", "crosshead displacement", "weg", "standardweg", "traversenweg"),
+    "pressure": ("pressure", "druck"),
+    "time": ("time", "test time", "running time", "elapsed time", "total time", "zeit", "testzeit"),
     "contact_radius": ("contact radius",),
 }
 _PREFIXES = ("axial ", "compressive ")
