@@ -217,3 +217,13 @@ def test_cli_bad_pairs_one_line(capsys):
     code = main(["fit", "x.csv", "--columns", "force"])
     err = capsys.readouterr().err
     assert code == 2 and "--columns takes KEY=VALUE pairs" in err
+
+
+@pytest.mark.parametrize("units_row", ["(s),(um),(mN)", "s,um,mN"])
+def test_units_row_under_unknown_names(tmp_path, clean, units_row):
+    """A units row is recognised by its units when the header names nothing adhfit knows."""
+    path = table(tmp_path, "t,s,F\n" + units_row, pre="Test,1\n")
+    c = read_curve(path, "displacement", columns={"force": "F", "displacement": "s"})
+    np.testing.assert_allclose(c.force, clean.force, rtol=1e-12)
+    np.testing.assert_allclose(c.x, clean.x, rtol=1e-12)
+    assert c.excluded == ((1, "metadata above the header"), (3, "units row"))

@@ -177,8 +177,24 @@ def _is_units_row(row: list[str], header: list[str], width: int) -> bool:
     """A line under the header naming no known column, while the header names at least one."""
     if len(row) != width or len(header) != width:
         return False
-    known = [role_of(split_cell(c)[0]) is not None for c in header]
-    return any(known) and not any(role_of(split_cell(c)[0]) is not None for c in row)
+    if any(role_of(split_cell(c)[0]) is not None for c in row):
+        return False
+    filled = [c for c in row if c]
+    return bool(filled) and (any(role_of(split_cell(c)[0]) is not None for c in header)
+                             or all(c[0] + c[-1] in ("()", "[]") for c in filled)
+                             or all(_is_unit(c) for c in filled))
+
+
+def _is_unit(cell: str) -> bool:
+    """Whether pint reads a cell as a unit (``mm``, ``kN``, ``sec``), never a plain number."""
+    from ..units import ureg  # noqa: PLC0415
+    if is_number(cell, ".") or is_number(cell, ","):
+        return False
+    try:
+        ureg.parse_units(cell)
+    except Exception:  # noqa: BLE001 - pint raises many unrelated types for non-units
+        return False
+    return True
 
 
 def _classify(lines: list[str], layout: Layout, above_reason: str) -> None:
