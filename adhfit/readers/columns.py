@@ -81,10 +81,12 @@ SIGNS = {"force_sign": ("compressive-positive", "tensile-positive"),
 def check_overrides(control: str, columns: Mapping[str, str] | None, units: Mapping[str, str] | None,
                     force_sign: str | None, displacement_sign: str | None) -> None:
     """Raise :class:`InputError` for override keys or values that can never be valid."""
+    usable = (*REQUIRED[control], *OPTIONAL)
     for name, given in (("columns", columns), ("units", units)):
         for key, value in (given or {}).items():
-            if key not in COLUMNS:
-                raise InputError(name, {key: value}, "keys among " + ", ".join(map(repr, COLUMNS)))
+            if key not in usable:
+                raise InputError(name, {key: value}, f"keys among {', '.join(map(repr, usable))} "
+                                                     f"(under {control} control)")
             if not isinstance(value, str) or not value.strip():
                 raise InputError(name, {key: value}, f"a non-empty {'column name' if name == 'columns' else 'unit'}")
     for name, value in (("force_sign", force_sign), ("displacement_sign", displacement_sign)):
@@ -184,7 +186,7 @@ def assign(cells: list[str], control: str, *, where: str, header_no: int, units_
     for role, (j,) in chosen.items():
         _unit(out, role, j, cells, units_row, units_no, file_units, units, where, header_no)
     for role in units or {}:
-        if role not in out.index and not any(r == role for r in chosen):
+        if role not in out.index:
             raise DataError(f"--units {role}={units[role]}: the file has no {role} column; "
                             f"{_tail(cells, control)}", path=where, line=header_no)
     return out
