@@ -26,6 +26,12 @@ def _pyplot():
     return plt
 
 
+def _scales_of(scene: Any):
+    """The :class:`~adhfit.units.Scales` of a SceneResult (attribute) or a Scene (method)."""
+    sc = scene.scales
+    return sc if not callable(sc) else sc(None)
+
+
 def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | None = None):
     """Force against the control variable, coloured by stage; the unstable branch dashed.
 
@@ -53,7 +59,7 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     x, f = fr[xkey].to_numpy(float), fr["f"].to_numpy(float)
     xlabel, ylabel = ("δ/b" if xkey == "delta" else "Pb/2μh"), "F/(2μh b)"
     if scene is not None:
-        sc = scene.scales(None)
+        sc = _scales_of(scene)
         if xkey == "delta":
             x, xlabel = x * sc.length * 1e6, "displacement δ (µm)"
         else:
@@ -73,11 +79,15 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     s = result.summary
     tp = s["turning_point"]
     j = int(np.flatnonzero(stable)[-1])
-    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (pull-off)")
+    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (a real test jumps off here)")
+    fmin = s.get("f_min") or {}
+    i_min = int(np.nanargmin(f))
+    if fmin:
+        ax.plot([x[i_min]], [f[i_min]], "kv", ms=5, mfc="none", label="f_min (the paper's pull-off force)")
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(f"{control} control, {result.inputs.get('slip')}" + ("" if tp else ""))
+    ax.set_title(f"{control} control, {result.inputs.get('slip')}" + ("" if tp else ""), fontsize=10)
     ax.legend(fontsize=8)
     if path is not None:
         ax.figure.savefig(path, dpi=130)
