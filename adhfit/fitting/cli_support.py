@@ -152,13 +152,16 @@ def run_fit(args) -> int:
 
 def write_reports(result, out: Path, *, plot: bool = True, images: dict | None = None,
                   extra: dict | None = None) -> None:
-    """Write report.json, report.md, report.html and (``plot``) fit.png of one fit into ``out``."""
+    """Write report.json, report.md, report.html, plot_data.json (data and fitted curve, for a batch's
+    summary.html) and (``plot``) fit.png of one fit into ``out``."""
     from ..report.fit_plot import plot_fit  # noqa: PLC0415
     from ..report.html import write_html  # noqa: PLC0415
     from ..report.json_report import write_json  # noqa: PLC0415
     from ..report.markdown import write_markdown  # noqa: PLC0415
     write_json(result, out / "report.json", extra=extra)
     write_markdown(result, out / "report.md")
+    from ..report.summary_html import write_plot_data  # noqa: PLC0415
+    write_plot_data(result, out / "plot_data.json")
     figures = dict(images or {})
     if plot:
         plot_fit(result, path=out / "fit.png")

@@ -28,7 +28,7 @@ def _shade(ax, curve: dict, kx: float) -> None:
              ("delamination", curve["x_turning_point"], curve["x_onset"]))
     for name, lo, hi in spans[1:]:
         ax.axvspan(lo * kx, hi * kx, color=STAGE_COLORS[name], alpha=0.07, lw=0,
-                   label=f"{name} (reported fit, unloading)")
+                   label=f"{name} (unloading)")
     ax.axvline(curve["x_contact"] * kx, color=STAGE_COLORS["making_contact"], lw=0.7, ls=":",
                label="contact (reported fit)")
 
@@ -83,7 +83,7 @@ def _values_box(ax, result) -> None:
     lines = [f"{names.get(k, k)} = {estimate_text(k, v)}" for k, v in (d.get("parameters") or {}).items()
              if isinstance(v, dict)]
     lines.append(f"slip: {(d.get('slip') or {}).get('verdict')}")
-    ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right", va="bottom", fontsize=8,
+    ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right", va="bottom", fontsize=8, multialignment="left",
             bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "0.7", "alpha": 0.9})
 
 

@@ -92,7 +92,9 @@ def _section_slip(d: Mapping[str, Any]) -> str:
     return "\n".join([
         "<h2>Slip condition</h2>",
         f"<p>Selected: <b>{e(slip.get('selected') or 'none (the data cannot tell)')}</b>. "
-        f"{e(slip.get('explanation', ''))}" + (f" ΔBIC = {num(dbic, 3)}." if dbic is not None else "") + "</p>",
+        f"{e(slip.get('explanation', ''))}"
+        + (f" ΔBIC = {num(dbic, 3)}." if dbic is not None and "ΔBIC" not in str(slip.get("explanation")) else "")
+        + "</p>",
         table(["slip", "reduced χ²", "AIC", "BIC", "W_ad", "μh"], rows, numeric=(1, 2, 3)),
         "<p class=\"muted\">The slip condition is decided by comparing the two fits (ΔBIC &gt; 10: decisive; "
         "2–10: favoured, not selected; &lt; 2: no preference). A single fit's χ² cannot tell.</p>"])
@@ -141,7 +143,8 @@ def _section_scene(d: Mapping[str, Any]) -> str:
     priors = scene.pop("priors", None)
     if not scene:
         return ""
-    rows = [[e(lbl), e(val), e(unit)] for lbl, val, unit in (scene_value(k, v) for k, v in scene.items())]
+    shown = {k: v for k, v in scene.items() if v is not None or k in ("mu_h", "work_of_adhesion")}
+    rows = [[e(lbl), e(val), e(unit)] for lbl, val, unit in (scene_value(k, v) for k, v in shown.items())]
     out = ["<h2>Test set-up (scene)</h2>", table(["", "value", "unit"], rows, numeric=(1,))]
     if priors:
         out.append("<p>Priors from the scene:</p>" + value_html(priors))

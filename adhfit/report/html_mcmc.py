@@ -56,8 +56,8 @@ def _priors(m: Mapping[str, Any]) -> str:
     for name, p in pri.items():
         p = p if isinstance(p, Mapping) else {"description": p}
         rest = {k: v for k, v in p.items() if k not in ("description",)}
-        rows.append([_sym(name), e(p.get("description", "")), value_html(rest) if rest else ""])
-    return ("<h3>Priors</h3>" + table(["parameter", "prior", "settings (SI)"], rows)
+        rows.append([_sym(name), e(p["description"]) if p.get("description") else value_html(rest)])
+    return ("<h3>Priors</h3>" + table(["parameter", "prior (SI units)"], rows)
             + "<p class=\"muted\">Set them in the scene's <code>[priors]</code> table (docs/contracts.md); the "
               "default is log-uniform on W_ad and μh.</p>")
 

@@ -45,6 +45,8 @@ def num(x: Any, digits: int = 4) -> str:
         return e(x)
     if isinstance(x, float) and not math.isfinite(x):
         return "n/a"
+    if isinstance(x, int) or (isinstance(x, float) and x.is_integer() and abs(x) < 1e7 and digits >= 3):
+        return e(f"{int(x)}")
     return e(f"{x:.{digits}g}")
 
 
