@@ -1,4 +1,4 @@
-"""Command line: ``adhfit simulate`` (DESIGN.md A2) and ``adhfit fit`` (A5).
+"""Command line: ``adhfit simulate`` (docs/contracts.md A2) and ``adhfit fit`` (A5).
 
 Thin: parse, call the library, write files. Invalid input ends with exit status 2 and one line on
 standard error that names the parameter, its value and the valid range; never a traceback.

@@ -23,7 +23,7 @@ def find_browser() -> str | None:
     return next((p for p in map(shutil.which, BROWSERS) if p), None)
 
 
-def screenshot(browser: str, html: Path, png: Path, *, width: int = 1100, height: int = 6000) -> Path:
+def screenshot(browser: str, html: Path, png: Path, *, width: int = 1300, height: int = 6000) -> Path:
     """Render ``html`` with headless Chromium into ``png`` (full window, trimmed later)."""
     with tempfile.TemporaryDirectory() as profile:
         cmd = [browser, "--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
@@ -43,7 +43,7 @@ def trim(png: Path, *, max_width: int = 900, max_height: int = 5000) -> Path:
         img = img.crop((0, 0, img.width, min(img.height, box[3] + 20, max_height)))
     if img.width > max_width:
         img = img.resize((max_width, round(img.height * max_width / img.width)), Image.LANCZOS)
-    img.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(png, optimize=True)  # small enough to commit
+    img.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(png, optimize=True)  # small enough to commit
     return png
 
 

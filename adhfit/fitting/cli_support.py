@@ -1,4 +1,4 @@
-"""``adhfit fit`` (DESIGN.md A5): the argument parser and the run function the CLI calls.
+"""``adhfit fit`` (docs/contracts.md A5): the argument parser and the run function the CLI calls.
 
 Thin: parse, call :func:`adhfit.fitting.fit.fit_curve`, write ``report.json``, ``report.md`` and
 ``fit.png`` into the output directory, print a short summary.  Invalid input raises

@@ -1,4 +1,4 @@
-"""report.json (DESIGN.md A5): the fit result as JSON, SI values, never NaN."""
+"""report.json (docs/contracts.md A5): the fit result as JSON, SI values, never NaN."""
 from __future__ import annotations
 
 import json

@@ -45,7 +45,7 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
     fig.suptitle(f"posterior, {slip} ({len(samples)} samples; red: least squares)"
                  + ("" if result.mcmc["slips"][slip]["diagnostics"]["converged"]
                     else " — NOT CONVERGED"), fontsize=9, y=0.995)
-    fig.subplots_adjust(top=0.86)  # room for the suptitle above the first panel's own title
+    fig.subplots_adjust(top=0.9)  # room for the suptitle above the first panel's own title
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig
