@@ -91,10 +91,28 @@ def test_python_blocks_run(sandbox):
     assert (where / "report.html").is_file()
 
 
+def _later_bash() -> list[str]:
+    later = README.split("\n## ", 2)[2]
+    return re.findall(r"```bash\n(.+?)\n```", later, flags=re.S)
+
+
+def test_bash_blocks_parse():
+    """CI variant of the next test: every `adhfit` line of the later bash blocks is accepted by the parser
+    (a renamed or removed option fails here without running the fits)."""
+    import shlex
+    from adhfit.cli import _build_parser
+    lines = [ln for block in _later_bash() for ln in block.splitlines() if ln.startswith("adhfit ")]
+    assert len(lines) >= 4
+    parser = _build_parser()
+    for line in lines:
+        args = parser.parse_args(shlex.split(line)[1:])
+        assert args.command in ("fit", "simulate"), line
+
+
+@pytest.mark.slow
 def test_bash_blocks_after_the_first_section_run(sandbox):
     where, env = sandbox
-    later = README.split("\n## ", 2)[2]
-    cmds = [c for c in re.findall(r"```bash\n(.+?)\n```", later, flags=re.S)
+    cmds = [c for c in _later_bash()
             if "sample_data/ -o" not in c]  # the batch over every sample is the slow run; covered by test_batch
     assert any("--mu-h" in c for c in cmds)
     for block in cmds:
