@@ -41,11 +41,11 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
         "fit", help="fit W_ad, mu*h and the slip condition to a measured curve",
         description="Fit the work of adhesion W_ad, the membrane stiffness mu*h and the interface slip "
                     "condition to a measured force curve (docs/contracts.md). Writes OUTDIR/report.json, "
-                    "report.md, report.html and fit.png. Several files or a folder: one fit per curve and "
-                    "OUTDIR/summary.csv (see adhfit.fitting.batch).")
+                    "report.md, report.html and fit.png. Several files or a folder: one fit per curve, "
+                    "OUTDIR/summary.csv and OUTDIR/summary.html (a page with every curve).")
     p.add_argument("data", type=Path, nargs="+", metavar="DATA",
                    help="measured curve (CSV, 'name [unit]' headers); several files or folders: a batch "
-                        "with OUTDIR/summary.csv (exit 1 if any curve failed)")
+                        "with OUTDIR/summary.csv and summary.html (exit 1 if any curve failed)")
     p.add_argument("--scene", type=Path, default=None, metavar="SCENE.toml",
                    help="scene file: geometry and the fixed pressure or gap (default: the nearest "
                         "scene.toml in the curve's folder or, for a folder argument, its parents)")
