@@ -9,10 +9,13 @@ gives is the fit's own.  Nothing here prints: the CLI does.
 from __future__ import annotations
 
 import os
+import sys
+import threading
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["engine_cache_is_cold", "warm_up", "COMPILING_NOTICE"]
+__all__ = ["engine_cache_is_cold", "warm_up", "COMPILING_NOTICE", "elapsed"]
 
 COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
 
@@ -74,3 +77,35 @@ def warm_up(control: str = "displacement") -> float:
     for slip in ("no-slip", "frictionless"):
         simulate(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
     return time.perf_counter() - t0
+
+
+@contextmanager
+def elapsed(desc: str, *, enabled: bool | None = None):
+    """A one-line running clock (tqdm) on standard error while a long step runs; nothing in a pipe.
+
+    Parameters
+    ----------
+    desc : str
+        What is running, e.g. ``"fitting curve.csv"``.
+    enabled : bool, optional
+        Default: only when standard error is a terminal.  The line is removed when the step ends.
+    """
+    show = sys.stderr.isatty() if enabled is None else enabled
+    if not show:
+        yield
+        return
+    from tqdm import tqdm  # noqa: PLC0415
+    bar = tqdm(total=None, desc=desc, bar_format="{desc}: {elapsed}", leave=False, file=sys.stderr)
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.5):
+            bar.refresh()
+    thread = threading.Thread(target=tick, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        bar.close()

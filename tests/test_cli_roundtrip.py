@@ -166,3 +166,14 @@ def test_notice_is_printed_once_on_a_cold_start(tmp_path, capsys, monkeypatch, q
     _, err = capsys.readouterr()
     assert code == 0
     assert err.count("compiling the engine") == (0 if quiet else 1)
+    assert "fitting curve.csv" not in err  # the running clock is drawn on a terminal only, never in a pipe
+
+
+def test_running_clock_only_when_asked(capsys):
+    import time as _time
+    with cli_engine.elapsed("fitting x", enabled=False):
+        _time.sleep(0.01)
+    assert capsys.readouterr().err == ""
+    with cli_engine.elapsed("fitting x", enabled=True):
+        _time.sleep(0.7)
+    assert "fitting x: 00:0" in capsys.readouterr().err

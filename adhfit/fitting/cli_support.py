@@ -141,10 +141,13 @@ def run_fit(args) -> int:
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     scene = load_scene(args.scene)
     curve = read_curve(args.data, scene.control)
-    startup = start_engine(scene.control, quiet=getattr(args, "quiet", False))
-    result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
-                       fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
-                       seed=args.seed, points=args.points, profile=not args.no_profile)
+    quiet = getattr(args, "quiet", False)
+    startup = start_engine(scene.control, quiet=quiet)
+    from ..cli_engine import elapsed  # noqa: PLC0415
+    with elapsed(f"fitting {Path(args.data).name}", enabled=False if quiet else None):
+        result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
+                           fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
+                           seed=args.seed, points=args.points, profile=not args.no_profile)
     write_reports(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
     print(_summary(result, out))
     return 0
