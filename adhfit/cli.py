@@ -158,7 +158,7 @@ def _run_simulate(args) -> int:
             _write_csv(result.frame, args.output)
     if args.plot is not None:
         from .report.plots import plot_history  # noqa: PLC0415
-        plot_history(result, scene=scene, path=args.plot)
+        plot_history(result, scene=None if scene is None else scene.scales(args.mu_h), path=args.plot)
     if args.json:
         print(json.dumps(result.summary, allow_nan=False))
     return 0

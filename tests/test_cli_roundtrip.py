@@ -177,3 +177,20 @@ def test_running_clock_only_when_asked(capsys):
     with cli_engine.elapsed("fitting x", enabled=True):
         _time.sleep(0.7)
     assert "fitting x: 00:0" in capsys.readouterr().err
+
+
+def test_scene_plot_in_physical_units(tmp_path, capsys):
+    # the scene's stiffness comes from --mu-h only: the plot must use it (it once asked the scene for it)
+    _simulate(capsys, _scene(tmp_path), tmp_path / "c.csv", "--delta-max", "0.6 mm", "--points", "60",
+              "--plot", str(tmp_path / "h.png"))
+    assert (tmp_path / "h.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_scene_result_plot_is_callable(tmp_path):
+    import adhfit
+    s = adhfit.simulate_scene(adhfit.load_scene(_scene(tmp_path)), mu_h="2 N/m", work_of_adhesion="0.4 J/m^2",
+                              slip="no-slip", a_max=0.25, points=60)
+    ax = s.plot()  # raised "'Scales' object is not callable"
+    assert ax.get_xlabel() == "displacement δ (µm)" and ax.get_ylabel() == "force F (mN)"
+    labels = ax.get_legend_handles_labels()[1]
+    assert any(lbl.startswith("turning point") for lbl in labels) and any(lbl.startswith("f_min") for lbl in labels)

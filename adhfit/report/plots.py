@@ -27,9 +27,19 @@ def _pyplot():
 
 
 def _scales_of(scene: Any):
-    """The :class:`~adhfit.units.Scales` of a SceneResult (attribute) or a Scene (method)."""
+    """The :class:`~adhfit.units.Scales` itself, of a SceneResult (attribute) or of a Scene (method)."""
+    if hasattr(scene, "force") and hasattr(scene, "length"):
+        return scene
     sc = scene.scales
     return sc if not callable(sc) else sc(None)
+
+
+def _mark_extrema(ax, x: np.ndarray, f: np.ndarray, stable: np.ndarray) -> None:
+    """The turning point (last stable row: a real test jumps off there) and f_min (most negative force)."""
+    j = int(np.flatnonzero(stable)[-1])
+    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (a real test jumps off here)")
+    i_min = int(np.nanargmin(f))
+    ax.plot([x[i_min]], [f[i_min]], "kv", ms=5, mfc="none", label="f_min (the paper's pull-off force)")
 
 
 def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | None = None):
@@ -39,7 +49,7 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     ----------
     result : SimulationResult
         From :func:`adhfit.simulate`.
-    scene : Scene, optional
+    scene : Scales, SceneResult or Scene, optional
         When given, axes are in physical units (mN against µm or kPa); else dimensionless.
     ax : matplotlib Axes, optional
         Draw here; a new figure otherwise.
@@ -76,14 +86,8 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
             idx = np.unique(np.concatenate([idx, np.maximum(idx - 1, 0)])) if idx[0] > 0 else idx
             ax.plot(x[idx], f[idx], style, color=color,
                     label=name.replace("_", " ") + ("" if style == "-" else " (unstable)"))
-    s = result.summary
-    tp = s["turning_point"]
-    j = int(np.flatnonzero(stable)[-1])
-    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (a real test jumps off here)")
-    fmin = s.get("f_min") or {}
-    i_min = int(np.nanargmin(f))
-    if fmin:
-        ax.plot([x[i_min]], [f[i_min]], "kv", ms=5, mfc="none", label="f_min (the paper's pull-off force)")
+    tp = result.summary["turning_point"]
+    _mark_extrema(ax, x, f, stable)
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
