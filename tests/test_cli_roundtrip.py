@@ -194,3 +194,11 @@ def test_scene_result_plot_is_callable(tmp_path):
     assert ax.get_xlabel() == "displacement δ (µm)" and ax.get_ylabel() == "force F (mN)"
     labels = ax.get_legend_handles_labels()[1]
     assert any(lbl.startswith("turning point") for lbl in labels) and any(lbl.startswith("f_min") for lbl in labels)
+
+
+def test_a_bad_input_leaves_no_output_folder(tmp_path, capsys):
+    out = tmp_path / "never"
+    code = main(["fit", str(tmp_path / "missing.csv"), "--scene", str(SAMPLE / "scene.toml"), "-o", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert not out.exists()

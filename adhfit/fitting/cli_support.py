@@ -82,12 +82,12 @@ def _x_offset(args, control: str) -> bool:
 
 
 def check_output_dir(path: Path) -> Path:
-    """Make sure ``path`` can hold the reports *before* any work: create it, or raise one clear line.
+    """Make sure ``path`` can hold the reports *before* any work, without creating it yet.
 
     Raises
     ------
     InputError
-        ``path`` is an existing file, lies under a file, or cannot be created or written.
+        ``path`` is an existing file, lies under a file, or its nearest existing folder is not writable.
     """
     path = Path(path)
     if path.exists() and not path.is_dir():
@@ -96,14 +96,9 @@ def check_output_dir(path: Path) -> Path:
     parent = next((q for q in [path, *path.parents] if q.exists()), Path("."))
     if not parent.is_dir():
         raise InputError("-o/--output", str(path), "a folder path", f"{parent} is a file, not a folder.")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError("-o/--output", str(path), "a folder you can create",
-                         f"{err.strerror or err}; choose a folder you can write to.") from None
-    if not os.access(path, os.W_OK | os.X_OK):
+    if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError("-o/--output", str(path), "a folder you can write to",
-                         "Choose another folder, or change its permissions.")
+                         f"{parent} is not writable; choose another folder, or change its permissions.")
     return path
 
 
@@ -161,6 +156,7 @@ def write_reports(result, out: Path, *, plot: bool = True, images: dict | None =
     from ..report.html import write_html  # noqa: PLC0415
     from ..report.json_report import write_json  # noqa: PLC0415
     from ..report.markdown import write_markdown  # noqa: PLC0415
+    out.mkdir(parents=True, exist_ok=True)
     write_json(result, out / "report.json", extra=extra)
     write_markdown(result, out / "report.md")
     from ..report.summary_html import write_plot_data  # noqa: PLC0415

@@ -22,6 +22,7 @@ def run_fit_mcmc(args) -> int:
     out = check_output_dir(args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit"))
     quiet = getattr(args, "quiet", False)
     startup = start_engine(scene.control, quiet=quiet)
+    out.mkdir(parents=True, exist_ok=True)  # the chains are written while sampling
     result = fit_curve_mcmc(curve, scene, slip=args.slip, sigma=sigma,
                             fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
                             seed=args.seed, points=args.points, outdir=out, progress=False if quiet else None)
