@@ -139,6 +139,12 @@ def test_mcmc_page_shows_diagnostics_priors_and_evidence_as_tables():
         assert f"<h3>{heading}</h3><table" in flat, heading
     assert "R-hat" in text and "1.0003" in text and "1915.62" in text and "loguniform on [0.004, 40]" in text
     assert "seed 5" in text and "11440" in text
+    assert "has not converged" not in text
+    d = _mcmc_report()
+    d["converged"] = False
+    d["mcmc"]["converged"] = False
+    page = render_html(d)
+    assert page.index("has not converged") < page.index("<h2>Warnings</h2>")  # said first, not buried
 
 
 def test_notebook_view_is_a_table():

@@ -207,7 +207,10 @@ def _head(d: Mapping[str, Any], title: str) -> str:
             f"{e(seed_text(d))}; adhfit {e(prov.get('adhfit_version'))}; generated {now}.<br>Input "
             f"<code>{e(prov.get('input'))}</code>, scene <code>{e(prov.get('scene_file'))}</code>.</p>"
             f"<p class=\"verdict\">Slip: <b>{e(slip.get('verdict'))}</b><br>" + "<br>".join(
-                lines).replace("work_of_adhesion:", "W_ad =").replace("mu_h:", "μh =") + "</p>")
+                lines).replace("work_of_adhesion:", "W_ad =").replace("mu_h:", "μh =") + "</p>"
+            + ("<p class=\"bad\"><b>The MCMC run has not converged</b>: do not trust these values and intervals "
+               "(see the convergence diagnostics below).</p>" if d.get("method") == "mcmc"
+               and d.get("converged", (d.get("mcmc") or {}).get("converged")) is False else ""))
 
 
 def render_html(result: Any, *, images: Mapping[str, Any] | None = None, title: str | None = None,
