@@ -15,7 +15,7 @@ from pathlib import Path
 from ..errors import InputError
 from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
 
-__all__ = ["add_fit_arguments", "run_fit", "check_output_dir", "start_engine", "write_reports"]
+__all__ = ["add_fit_arguments", "read_options", "run_fit", "check_output_dir", "start_engine", "write_reports"]
 
 
 def _seed(text: str) -> int:
@@ -33,6 +33,26 @@ def _points(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"--points must be an integer in [40, 5000]; got {text!r}") from None
+
+
+def _pairs(flag: str, example: str):
+    """An argparse type for ``key=value,key=value`` (``--columns``, ``--units``)."""
+    def parse(text: str) -> dict[str, str]:
+        out = {}
+        for item in filter(None, (part.strip() for part in text.split(","))):
+            key, sep, value = item.partition("=")
+            if not sep or not key.strip() or not value.strip():
+                raise argparse.ArgumentTypeError(f"{flag} takes KEY=VALUE pairs separated by commas, e.g. "
+                                                 f"{flag} {example}; got {text!r}")
+            out[key.strip()] = value.strip()
+        return out
+    return parse
+
+
+def read_options(args) -> dict:
+    """The reader overrides (``--columns``, ``--units``, ``--force-sign``, ``--displacement-sign``) given."""
+    keys = ("columns", "units", "force_sign", "displacement_sign")
+    return {k: getattr(args, k) for k in keys if getattr(args, k, None)}
 
 
 def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
@@ -67,6 +87,16 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress bar and no start-up notice on standard error (results still printed)")
+    r = p.add_argument_group("reading the data file", "needed only where the file does not tell "
+                             "(instrument exports are recognised without them; see docs/input-formats.md)")
+    r.add_argument("--columns", type=_pairs("--columns", "force=Load,displacement=Position"), default=None,
+                   metavar="force=NAME,displacement=NAME", help="which header names hold which quantity")
+    r.add_argument("--units", type=_pairs("--units", "displacement=mm,force=N"), default=None,
+                   metavar="displacement=mm,force=N", help="units, overriding the file's")
+    r.add_argument("--force-sign", choices=("compressive-positive", "tensile-positive"), default=None,
+                   help="the file's force sign (default: compressive-positive)")
+    r.add_argument("--displacement-sign", choices=("into-substrate-positive", "away-positive"), default=None,
+                   help="the file's displacement sign (default: into-substrate-positive)")
     p.set_defaults(run=run_fit)
     return p
 
@@ -135,7 +165,7 @@ def run_fit(args) -> int:
         return run_fit_mcmc(args)
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     scene = load_scene(args.scene)
-    curve = read_curve(args.data, scene.control)
+    curve = read_curve(args.data, scene.control, **read_options(args))
     quiet = getattr(args, "quiet", False)
     startup = start_engine(scene.control, quiet=quiet)
     from ..cli_engine import elapsed  # noqa: PLC0415

@@ -14,11 +14,12 @@ def run_fit_mcmc(args) -> int:
     from ..data import read_curve  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from .cli_support import _summary, _x_offset, check_output_dir, start_engine, write_reports  # noqa: PLC0415
+    from .cli_support import _summary, _x_offset, check_output_dir, read_options, start_engine  # noqa: PLC0415
+    from .cli_support import write_reports  # noqa: PLC0415
     from .mcmc_fit import fit_curve_mcmc  # noqa: PLC0415
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     scene = load_scene(args.scene)
-    curve = read_curve(args.data, scene.control)
+    curve = read_curve(args.data, scene.control, **read_options(args))
     out = check_output_dir(args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit"))
     quiet = getattr(args, "quiet", False)
     startup = start_engine(scene.control, quiet=quiet)
