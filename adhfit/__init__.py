@@ -3,7 +3,7 @@
 Forward model (Yang, Srivastava & Long, large-stretch neo-Hookean membrane against a rigid sphere or
 flat) and fits of the work of adhesion, the membrane stiffness and the interface slip condition.
 
-``simulate`` works in the dimensionless groups of DESIGN.md A1; ``simulate_scene`` takes a
+``simulate`` works in the dimensionless groups of docs/contracts.md A1; ``simulate_scene`` takes a
 :class:`Scene` in SI (``load_scene`` reads the TOML scene file).
 """
 from .errors import AdhfitError, ConvergenceError, DataError, InputError

@@ -1,4 +1,4 @@
-"""Command line: ``adhfit simulate`` (DESIGN.md A2) and ``adhfit fit`` (A5).
+"""Command line: ``adhfit simulate`` (docs/contracts.md A2) and ``adhfit fit`` (A5).
 
 Thin: parse, call the library, write files. Invalid input ends with exit status 2 and one line on
 standard error that names the parameter, its value and the valid range; never a traceback.
@@ -49,6 +49,31 @@ def _number(name: str):
     return convert
 
 
+def _end(name: str):
+    """argparse type of a loading end: a number (dimensionless), or kept as text when it carries a unit
+    (physical, only with --scene)."""
+    number = _number(name)
+
+    def convert(text: str):
+        try:
+            return number(text)
+        except argparse.ArgumentTypeError:
+            if any(c.isalpha() for c in text.replace("inf", "")):
+                return text  # e.g. "0.6 mm": checked against --scene later
+            raise
+    return convert
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"--seed must be a non-negative integer; got {text!r}")
+    return value
+
+
 def _integer(name: str):
     def convert(text: str) -> int:
         try:
@@ -63,7 +88,7 @@ def _integer(name: str):
 def _simulate_parser(sub) -> None:
     p = sub.add_parser("simulate", help="compute a loading history (dimensionless or from a scene file)",
                        description="Compute a loading history of the inflated-membrane adhesion model "
-                                   "(DESIGN.md A2). Values are dimensionless groups unless --scene is given.")
+                                   "(docs/contracts.md). Values are dimensionless groups unless --scene is given.")
     T = DIMENSIONLESS
     p.add_argument("--control", choices=("displacement", "pressure"))
     p.add_argument("--slip", choices=("no-slip", "frictionless"))
@@ -73,15 +98,29 @@ def _simulate_parser(sub) -> None:
     p.add_argument("--w", type=_number("w"), help=f"{T['w'].description}: {T['w'].valid_range}")
     p.add_argument("--rs", type=_number("rs"), help=f"{T['rs'].description}: {T['rs'].valid_range}")
     end = p.add_mutually_exclusive_group()
-    end.add_argument("--a-max", type=_number("a-max"), help=T["a_max"].description)
-    end.add_argument("--delta-max", type=_number("delta-max"), help=T["delta_max"].description)
-    end.add_argument("--p-max", type=_number("p-max"), help=T["p_max"].description)
+    unit = " (with --scene also a value with a unit, e.g. {})"
+    end.add_argument("--a-max", type=_end("a-max"), help=T["a_max"].description + unit.format("'0.5 mm'"))
+    end.add_argument("--delta-max", type=_end("delta-max"),
+                     help=T["delta_max"].description + unit.format("'0.6 mm'"))
+    end.add_argument("--p-max", type=_end("p-max"), help=T["p_max"].description + unit.format("'1.6 kPa'"))
     p.add_argument("--lambda0", type=_number("lambda0"), default=None, help="pre-stretch (default 2)")
     p.add_argument("--points", type=_integer("points"), default=200, help="approximate number of rows")
     p.add_argument("-o", "--output", type=Path, help="write the history as CSV")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     p.add_argument("--plot", type=Path, help="write a plot of the history (PNG, PDF, SVG)")
-    p.add_argument("--scene", type=Path, help="physical input: a scene file (DESIGN.md A3)")
+    p.add_argument("--scene", type=Path,
+                   help="physical input: a scene file (docs/contracts.md). -o then writes a measured-style "
+                        "curve (displacement [um] or pressure [kPa], force [mN]) that 'adhfit fit' reads")
+    p.add_argument("--mu-h", default=None, metavar="VALUE", help="with --scene: membrane stiffness, e.g. '2 N/m'")
+    p.add_argument("--work-of-adhesion", default=None, metavar="VALUE",
+                   help="with --scene: work of adhesion, e.g. '0.4 J/m^2'")
+    p.add_argument("--noise", type=float, default=0.0, metavar="FRACTION",
+                   help="with --scene: Gaussian force noise, a fraction of the force at the end of loading "
+                        "(e.g. 0.01; default 0)")
+    p.add_argument("--seed", type=_seed, default=None, help="with --scene: seed of the noise")
+    p.add_argument("--history", action="store_true",
+                   help="with --scene: write the full dimensionless history (the columns without --scene) "
+                        "instead of the measured-style curve")
 
 
 def _fit_parser(sub) -> None:
@@ -95,6 +134,16 @@ def _run_simulate(args) -> int:
         kwargs, scene = _scene_kwargs(args)
     else:
         scene = None
+        for name in ("mu_h", "work_of_adhesion", "seed"):
+            if getattr(args, name) is not None:
+                raise _Usage(f"adhfit simulate: --{name.replace('_', '-')} needs --scene (physical units)")
+        if args.noise or args.history:
+            raise _Usage(f"adhfit simulate: --{'noise' if args.noise else 'history'} needs --scene")
+        for name in ("a_max", "delta_max", "p_max"):
+            if isinstance(getattr(args, name), str):
+                valid = DIMENSIONLESS[name].valid_range
+                raise _Usage(f"adhfit simulate: --{name.replace('_', '-')} must be {valid}; got "
+                             f"{getattr(args, name)!r} (a value with a unit needs --scene)")
         missing = [n for n in ("control", "slip", "w", "rs") if getattr(args, n) is None]
         if missing:
             raise _Usage(f"adhfit simulate: --{missing[0]} is required (or give --scene)")
@@ -103,10 +152,13 @@ def _run_simulate(args) -> int:
                   "p_max": args.p_max, "lambda0": 2.0 if args.lambda0 is None else args.lambda0}
     result = simulate(**kwargs, points=args.points)
     if args.output is not None:
-        _write_csv(result.frame, args.output)
+        if scene is not None and not args.history:
+            _write_measured(args, scene, result)
+        else:
+            _write_csv(result.frame, args.output)
     if args.plot is not None:
         from .report.plots import plot_history  # noqa: PLC0415
-        plot_history(result, scene=scene, path=args.plot)
+        plot_history(result, scene=None if scene is None else scene.scales(args.mu_h), path=args.plot)
     if args.json:
         print(json.dumps(result.summary, allow_nan=False))
     return 0
@@ -117,10 +169,12 @@ def _scene_kwargs(args):
     for name in ("control", "p", "d", "w", "rs", "lambda0"):
         if getattr(args, name) is not None:
             raise _Usage(f"adhfit simulate: --{name} cannot be combined with --scene (the scene sets it)")
+    from .fitting.measured import parse_end  # noqa: PLC0415
     scene = load_scene(args.scene)
-    kwargs = scene.to_dimensionless(slip=args.slip)
-    given = {k: v for k, v in (("a_max", args.a_max), ("delta_max", args.delta_max),
-                               ("p_max", args.p_max)) if v is not None}
+    kwargs = scene.to_dimensionless(args.mu_h, args.work_of_adhesion, slip=args.slip)
+    scales = scene.scales(args.mu_h)
+    given = {k: parse_end(k, v, scales) for k, v in (("a_max", args.a_max), ("delta_max", args.delta_max),
+                                                     ("p_max", args.p_max)) if v is not None}
     if given:
         for k in ("a_max", "delta_max", "p_max"):
             kwargs.pop(k, None)
@@ -129,6 +183,18 @@ def _scene_kwargs(args):
         raise _Usage("adhfit simulate: give a loading end (--a-max, --delta-max or --p-max) or set "
                      "[test] contact_radius_max / displacement_max / pressure_max in the scene")
     return kwargs, scene
+
+
+def _write_measured(args, scene, result) -> None:
+    """The measured-style CSV of a scene run (what a testing machine records; 'adhfit fit' reads it)."""
+    from .fitting.measured import loading_end_si, measured_frame  # noqa: PLC0415
+    scales = scene.scales(args.mu_h)
+    kw = result.inputs
+    x_max = loading_end_si(result.frame, scene.control, scales)
+    frame, _ = measured_frame(scene, kw["slip"], mu_h=scales.mu_h, work_of_adhesion=kw["w"] * scales.mu_h,
+                              x_max=x_max, rows=args.points, noise=args.noise, seed=args.seed)
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    frame.to_csv(args.output, index=False, float_format="%.9g")
 
 
 def _write_csv(frame, path: Path) -> None:

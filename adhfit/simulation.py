@@ -1,4 +1,4 @@
-"""``adhfit.simulate``: the dimensionless forward model as a table (DESIGN.md A2b)."""
+"""``adhfit.simulate``: the dimensionless forward model as a table (docs/contracts.md A2b)."""
 from __future__ import annotations
 
 import math
@@ -18,7 +18,7 @@ class SimulationResult:
     Attributes
     ----------
     frame : pandas.DataFrame
-        Columns ``stage, a, alpha, p, d, delta, f, G, stable`` (DESIGN.md A2), history order,
+        Columns ``stage, a, alpha, p, d, delta, f, G, stable`` (docs/contracts.md A2), history order,
         dimensionless; ``delta`` is NaN where d0(p) is undefined (|p| > 1).
     summary : dict
         ``f_max``, ``onset``, ``f_min``, ``turning_point`` as in ``adhfit simulate --json``.
@@ -40,7 +40,7 @@ class SimulationResult:
 def simulate(control: str, slip: str, *, p: float | None = None, d: float | None = None,
              w: float, rs: float, a_max: float | None = None, delta_max: float | None = None,
              p_max: float | None = None, lambda0: float = 2.0, points: int = 200) -> SimulationResult:
-    """Simulate a loading history in dimensionless groups (DESIGN.md A1, A2b).
+    """Simulate a loading history in dimensionless groups (docs/contracts.md A1, A2b).
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
     python sample_data/make_samples.py            # from the repository root
 
-Each case directory gets ``curve.csv`` (DESIGN.md A4, physical units), ``scene.toml`` (A3, with
+Each case directory gets ``curve.csv`` (docs/contracts.md A4, physical units), ``scene.toml`` (A3, with
 ``slip = "auto"`` and neither μh nor W_ad: they are what a fit estimates) and ``truth.json`` (the
 parameters, noise and offsets used).  See README.md in this directory.
 """

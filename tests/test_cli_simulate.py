@@ -221,7 +221,8 @@ def test_scene_matches_dimensionless_run(tmp_path, capsys):
     scene = tmp_path / "scene.toml"
     scene.write_text(SCENE)
     for slip in ("no-slip", "frictionless"):
-        code, out, err = _run(capsys, ["--scene", str(scene), "--slip", slip, "--json", "-o", str(tmp_path / "s.csv")])
+        code, out, err = _run(capsys, ["--scene", str(scene), "--slip", slip, "--json", "--history",
+                                        "-o", str(tmp_path / "s.csv")])
         assert code == 0, err
         code2, out2, err2 = _run(capsys, [*_replace(DC, "--slip", slip), "--json", "-o", str(tmp_path / "d.csv")])
         assert code2 == 0, err2

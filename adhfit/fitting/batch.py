@@ -241,8 +241,10 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
             failures.append((job, rows[-1]["error"]))
             print(f"    failed: {rows[-1]['error']}", file=sys.stderr, flush=True)
     table = write_summary(rows, Path(outdir) / "summary.csv")
+    from ..report.summary_html import write_summary_html  # noqa: PLC0415 - a page to look at, next to the table
+    write_summary_html(rows, Path(outdir))
     ok = len(jobs) - len(failures)
-    print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - t0:.1f} s; wrote {table}")
+    print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - t0:.1f} s; wrote {table} and summary.html")
     if failures:
         print(f"adhfit: {len(failures)} of {len(jobs)} curves failed (listed in {table}):", file=sys.stderr)
         for job, message in failures:

@@ -28,7 +28,7 @@ def _shade(ax, curve: dict, kx: float) -> None:
              ("delamination", curve["x_turning_point"], curve["x_onset"]))
     for name, lo, hi in spans[1:]:
         ax.axvspan(lo * kx, hi * kx, color=STAGE_COLORS[name], alpha=0.07, lw=0,
-                   label=f"{name} (reported fit, unloading)")
+                   label=f"{name} (unloading)")
     ax.axvline(curve["x_contact"] * kx, color=STAGE_COLORS["making_contact"], lw=0.7, ls=":",
                label="contact (reported fit)")
 
@@ -53,11 +53,38 @@ def _main(ax, result, kx: float) -> None:
                 label=f"fit: {slip}" + (" (reported)" if slip == result.reported_slip else ""))
         ax.plot(np.asarray(mc["x_unloading"]) * kx, np.asarray(mc["force_unloading"]) * 1e3, ls, color=color, lw=1.1)
         ax.plot([mc["x_turning_point"] * kx] * 2, [mc["force_turning_point"] * 1e3, 0.0], ":", color=color, lw=0.8)
+    _mark_extrema(ax, result.fits[result.reported_slip].model_curve, kx)
     _shade(ax, result.fits[result.reported_slip].model_curve, kx)
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_ylabel("force (mN, compressive positive)")
     ax.set_title(f"{result.slip['verdict']}", fontsize=10)
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, ncol=2, loc="upper left")
+    _values_box(ax, result)
+
+
+def _mark_extrema(ax, mc, kx: float) -> None:
+    """The reported fit's turning point (where the test jumps off) and f_min (most negative force)."""
+    if not mc:
+        return
+    ax.plot([mc["x_turning_point"] * kx], [mc["force_turning_point"] * 1e3], "o", ms=5, mfc="none", color="k",
+            label="turning point: the test jumps off")
+    fu = np.asarray(mc["force_unloading"], float)
+    if fu.size:
+        i = int(np.nanargmin(fu))
+        ax.plot([np.asarray(mc["x_unloading"], float)[i] * kx], [fu[i] * 1e3], "v", ms=5, color="k",
+                label="f_min: most negative force (paper's pull-off force)")
+
+
+def _values_box(ax, result) -> None:
+    """The fitted values with their 95 % intervals, written on the plot (lower right)."""
+    from .text import estimate_text  # noqa: PLC0415
+    d = result.as_dict()
+    names = {"work_of_adhesion": "W_ad", "mu_h": "μh"}
+    lines = [f"{names.get(k, k)} = {estimate_text(k, v)}" for k, v in (d.get("parameters") or {}).items()
+             if isinstance(v, dict)]
+    lines.append(f"slip: {(d.get('slip') or {}).get('verdict')}")
+    ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right", va="bottom", fontsize=8, multialignment="left",
+            bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "0.7", "alpha": 0.9})
 
 
 def plot_fit(result, *, ax=None, path: str | Path | None = None, residuals: bool = True):

@@ -1,4 +1,4 @@
-"""report.json (DESIGN.md A5): the fit result as JSON, SI values, never NaN."""
+"""report.json (docs/contracts.md A5): the fit result as JSON, SI values, never NaN."""
 from __future__ import annotations
 
 import json
@@ -18,22 +18,27 @@ def _has_null_numbers(d, path=""):
     return out
 
 
-def report_dict(result) -> dict:
+def report_dict(result, extra: dict | None = None) -> dict:
     """The report.json content of a :class:`~adhfit.fitting.result.FitResult`.
 
     Every non-finite number becomes ``null``; when an estimate or its error is null, a warning
-    saying so is added (a null must never pass unexplained).
+    saying so is added (a null must never pass unexplained).  ``extra`` keys (e.g. the CLI's
+    ``engine_startup_s``, the one-off compile or cache load kept out of ``wall_time_s``) are added.
     """
     d = result.as_dict()
-    missing = _has_null_numbers(d.get("parameters", {}), "parameters")
+    d.update(extra or {})
+    params = d.get("parameters", {}) or {}
+    # a one-sided or undetermined estimate says so in its status; only unexplained nulls get a warning
+    missing = [m for m in _has_null_numbers(params, "parameters")
+               if (params.get(m.split(".")[1]) or {}).get("status", "determined") == "determined"]
     if missing:
         d["warnings"] = list(d["warnings"]) + [f"not computed (null in this report): {', '.join(missing)}"]
     return d
 
 
-def write_json(result, path: str | Path) -> Path:
+def write_json(result, path: str | Path, *, extra: dict | None = None) -> Path:
     """Write report.json; ``allow_nan=False`` guarantees strict JSON."""
     path = Path(path)
-    path.write_text(json.dumps(report_dict(result), indent=2, allow_nan=False, ensure_ascii=False) + "\n",
+    path.write_text(json.dumps(report_dict(result, extra), indent=2, allow_nan=False, ensure_ascii=False) + "\n",
                     encoding="utf-8")
     return path

@@ -14,11 +14,16 @@ def _num(x, digits=4) -> str:
     return "n/a" if x is None else f"{x:.{digits}g}"
 
 
-def _row(e) -> str:
-    k, unit = _UNITS.get(e.name, (1.0, e.unit))
-    se = "n/a" if e.stderr is None else f"{e.stderr * k:.2g}"
-    ci = "n/a" if e.ci95 is None else f"[{e.ci95[0] * k:.5g}, {e.ci95[1] * k:.5g}]"
-    return f"| {e.symbol} ({e.name}) | {e.value * k:.5g} ± {se} | {ci} ({e.ci_method or 'none'}) | {unit} |"
+def _row(name: str, d: dict) -> str:
+    """One table row from a report.json estimate; one-sided and undetermined values say so."""
+    from .text import display, estimate_text, interval_text, status_text  # noqa: PLC0415
+    sym, _, k, unit = display(name, d.get("unit"))
+    status = status_text(d)
+    if status != "determined":
+        return f"| {sym} ({name}) | {estimate_text(name, d)} | {interval_text(name, d, unit=False)} | {unit} |"
+    se = "n/a" if d.get("stderr") is None else f"{d['stderr'] * k:.2g}"
+    return (f"| {sym} ({name}) | {d['value'] * k:.5g} ± {se} | {interval_text(name, d, unit=False)} "
+            f"({d.get('ci_method') or 'none'}) | {unit} |")
 
 
 def _how(result) -> str:
@@ -34,7 +39,9 @@ def _estimates(result) -> list[str]:
     out = ["## Estimates", "",
            f"Reported fit: **{result.reported_slip}**. " + _how(result), "",
            "| parameter | value ± stderr | 95 % interval | unit |", "|---|---|---|---|"]
-    out += [_row(e) for e in result.parameters.values()]
+    d = result.as_dict()
+    out += [_row(n, e) for n, e in {**d.get("parameters", {}), **{k: v for k, v in (d.get("offsets") or {}).items()
+                                                                   if isinstance(v, dict)}}.items()]
     fit = result.fits[result.reported_slip]
     out += ["", f"- W_ad–μh correlation: {_num(result.correlation, 3)}",
             f"- reduced χ²: {_num(fit.redchi, 4)} ({fit.ndata} residuals, {fit.nvarys} parameters)",
@@ -47,10 +54,11 @@ def _slip(result) -> list[str]:
     out = ["## Slip condition", "", f"**{s['verdict']}** (selected: {s['selected'] or 'none'}). "
            + s.get("explanation", ""), "",
            "| slip | χ² | reduced χ² | AIC | BIC | W_ad (J/m²) | μh (N/m) |", "|---|---|---|---|---|---|---|"]
-    for name, f in result.fits.items():
-        w, m = f.parameters["work_of_adhesion"].value, f.parameters["mu_h"].value
-        out.append(f"| {name} | {_num(f.chisqr, 5)} | {_num(f.redchi, 4)} | {_num(f.aic, 6)} | {_num(f.bic, 6)} "
-                   f"| {w:.5g} | {m:.5g} |")
+    for name, f in result.as_dict().get("fits", {}).items():
+        p = f.get("parameters") or {}
+        w, m = (p.get("work_of_adhesion") or {}).get("value"), (p.get("mu_h") or {}).get("value")
+        out.append(f"| {name} | {_num(f.get('chisqr'), 5)} | {_num(f.get('redchi'), 4)} | {_num(f.get('aic'), 6)} "
+                   f"| {_num(f.get('bic'), 6)} | {_num(w, 5)} | {_num(m, 5)} |")
     out += ["", "Both fits share data and parameter count, so ΔAIC = ΔBIC = Δ(−2 ln L). Scale on ΔBIC: "
             "> 10 decisive (selected), 2–10 favoured with caution (not selected), < 2 no preference. "
             "A single fit's χ² cannot tell the slip condition; only the comparison can."]
@@ -74,13 +82,19 @@ def _treatment(result) -> list[str]:
            "turning-point force (a clamp that keeps the residual continuous).",
            "- The measured pull-off position (midway between the last attached and the first detached row, "
            "σ = spacing/√12) is one more residual against the model's turning point."]
-    for name, e in result.offsets.items():
-        k, unit = _UNITS.get(name, (1.0, e.unit))
-        out.append(f"- Nuisance parameter {name}: {e.value * k:.4g} ± {_num(None if e.stderr is None else e.stderr * k, 2)} "
-                   f"{unit} (added to the measured values).")
-    if not result.offsets:
+    offsets = result.as_dict().get("offsets") or {}
+    for name, e in offsets.items():
+        from .text import display, estimate_text  # noqa: PLC0415
+        text = estimate_text(name, e) if isinstance(e, dict) else f"{e * display(name)[2]:.4g} {display(name)[3]}"
+        out.append(f"- Offset {name}: {text} (added to the measured values).")
+    if not offsets:
         out.append("- No offsets were fitted.")
     return out
+
+
+def seed_text(d: dict) -> str:
+    from .text import seed_text as _seed  # noqa: PLC0415
+    return _seed(d)
 
 
 def render_markdown(result) -> str:
@@ -89,7 +103,7 @@ def render_markdown(result) -> str:
     out = ["# adhfit fit report", "",
            f"Input `{prov.get('input')}` (sha256 `{prov.get('input_sha256', '')[:16]}…`), scene "
            f"`{prov.get('scene_file')}`, method {result.method}, adhfit {prov.get('adhfit_version')}, "
-           f"seed {prov.get('seed')}.", ""]
+           f"{seed_text(result.as_dict())}.", ""]
     if result.method == "mcmc":
         from .mcmc_markdown import mcmc_sections  # noqa: PLC0415
         out += mcmc_sections(result)

@@ -44,7 +44,8 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
                         title_fmt=".4g", title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 9})
     fig.suptitle(f"posterior, {slip} ({len(samples)} samples; red: least squares)"
                  + ("" if result.mcmc["slips"][slip]["diagnostics"]["converged"]
-                    else " — NOT CONVERGED"), fontsize=9)
+                    else " — NOT CONVERGED"), fontsize=9, y=0.995)
+    fig.subplots_adjust(top=0.9)  # room for the suptitle above the first panel's own title
     if path is not None:
         fig.savefig(path, dpi=110)
     return fig

@@ -26,6 +26,22 @@ def _pyplot():
     return plt
 
 
+def _scales_of(scene: Any):
+    """The :class:`~adhfit.units.Scales` itself, of a SceneResult (attribute) or of a Scene (method)."""
+    if hasattr(scene, "force") and hasattr(scene, "length"):
+        return scene
+    sc = scene.scales
+    return sc if not callable(sc) else sc(None)
+
+
+def _mark_extrema(ax, x: np.ndarray, f: np.ndarray, stable: np.ndarray) -> None:
+    """The turning point (last stable row: a real test jumps off there) and f_min (most negative force)."""
+    j = int(np.flatnonzero(stable)[-1])
+    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (a real test jumps off here)")
+    i_min = int(np.nanargmin(f))
+    ax.plot([x[i_min]], [f[i_min]], "kv", ms=5, mfc="none", label="f_min (the paper's pull-off force)")
+
+
 def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | None = None):
     """Force against the control variable, coloured by stage; the unstable branch dashed.
 
@@ -33,7 +49,7 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     ----------
     result : SimulationResult
         From :func:`adhfit.simulate`.
-    scene : Scene, optional
+    scene : Scales, SceneResult or Scene, optional
         When given, axes are in physical units (mN against µm or kPa); else dimensionless.
     ax : matplotlib Axes, optional
         Draw here; a new figure otherwise.
@@ -53,7 +69,7 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     x, f = fr[xkey].to_numpy(float), fr["f"].to_numpy(float)
     xlabel, ylabel = ("δ/b" if xkey == "delta" else "Pb/2μh"), "F/(2μh b)"
     if scene is not None:
-        sc = scene.scales(None)
+        sc = _scales_of(scene)
         if xkey == "delta":
             x, xlabel = x * sc.length * 1e6, "displacement δ (µm)"
         else:
@@ -70,14 +86,12 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
             idx = np.unique(np.concatenate([idx, np.maximum(idx - 1, 0)])) if idx[0] > 0 else idx
             ax.plot(x[idx], f[idx], style, color=color,
                     label=name.replace("_", " ") + ("" if style == "-" else " (unstable)"))
-    s = result.summary
-    tp = s["turning_point"]
-    j = int(np.flatnonzero(stable)[-1])
-    ax.plot([x[j]], [f[j]], "ko", ms=4, label="turning point (pull-off)")
+    tp = result.summary["turning_point"]
+    _mark_extrema(ax, x, f, stable)
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(f"{control} control, {result.inputs.get('slip')}" + ("" if tp else ""))
+    ax.set_title(f"{control} control, {result.inputs.get('slip')}" + ("" if tp else ""), fontsize=10)
     ax.legend(fontsize=8)
     if path is not None:
         ax.figure.savefig(path, dpi=130)

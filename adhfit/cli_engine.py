@@ -1,0 +1,111 @@
+"""The command line's first minute: is the compiled engine cached, and load it before the real work.
+
+The numba kernels of :mod:`adhfit.core.compiled` are compiled on the first call in a new environment
+(about a minute, longer on a busy machine) and loaded from numba's on-disk cache afterwards (about a
+second).  The CLI uses :func:`engine_cache_is_cold` to print a one-line notice before a cold start, and
+:func:`warm_up` to pay the one-off cost before a fit starts its clock, so that the wall time a report
+gives is the fit's own.  Nothing here prints: the CLI does.
+"""
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+__all__ = ["engine_cache_is_cold", "warm_up", "COMPILING_NOTICE", "elapsed"]
+
+COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
+
+
+def _source() -> Path:
+    return Path(__file__).resolve().parent / "core" / "compiled.py"
+
+
+def _cache_dirs(source: Path) -> list[Path]:
+    """Where numba may keep the cache of ``source`` (next to it, or under NUMBA_CACHE_DIR)."""
+    dirs = [source.parent / "__pycache__"]
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    if env:
+        dirs.append(Path(env))
+    return dirs
+
+
+def engine_cache_is_cold() -> bool:
+    """True when the compiled kernels will have to be compiled (no numba cache, or one older than the
+    source); False when they are cached, or when the numpy backend or no numba is in use."""
+    if os.environ.get("ADHFIT_BACKEND", "auto").strip().lower() == "numpy":
+        return False
+    try:
+        import importlib.util  # noqa: PLC0415
+        if importlib.util.find_spec("numba") is None:
+            return False
+    except (ImportError, ValueError):
+        return False
+    source = _source()
+    try:
+        stamp = source.stat().st_mtime
+    except OSError:
+        return False
+    index = []
+    for folder in _cache_dirs(source):
+        if folder.is_dir():
+            index += list(folder.rglob(f"{source.stem}.*.nbi"))
+    if not index:
+        return True
+    return all(p.stat().st_mtime < stamp for p in index)
+
+
+def warm_up(control: str = "displacement") -> float:
+    """Run two tiny histories (both slip conditions) so every kernel a fit uses is compiled or loaded.
+
+    Parameters
+    ----------
+    control : {"displacement", "pressure"}
+        The control mode of the fit that follows.
+
+    Returns
+    -------
+    float
+        Seconds spent (compile or cache load).
+    """
+    from .simulation import simulate  # noqa: PLC0415
+    t0 = time.perf_counter()
+    fixed = {"p": 0.6} if control == "displacement" else {"d": 0.0}
+    for slip in ("no-slip", "frictionless"):
+        simulate(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
+    return time.perf_counter() - t0
+
+
+@contextmanager
+def elapsed(desc: str, *, enabled: bool | None = None):
+    """A one-line running clock (tqdm) on standard error while a long step runs; nothing in a pipe.
+
+    Parameters
+    ----------
+    desc : str
+        What is running, e.g. ``"fitting curve.csv"``.
+    enabled : bool, optional
+        Default: only when standard error is a terminal.  The line is removed when the step ends.
+    """
+    show = sys.stderr.isatty() if enabled is None else enabled
+    if not show:
+        yield
+        return
+    from tqdm import tqdm  # noqa: PLC0415
+    bar = tqdm(total=None, desc=desc, bar_format="{desc}: {elapsed}", leave=False, file=sys.stderr)
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.5):
+            bar.refresh()
+    thread = threading.Thread(target=tick, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        bar.close()

@@ -1,0 +1,205 @@
+"""summary.html of a batch: one page for many curves.
+
+A table of every curve (W_ad and μh with their intervals and status, slip, reduced χ², warnings, a link
+to the curve's own report.html), W_ad and μh across curves with their 95 % intervals, and small
+multiples of every curve with its fitted model.  It reads what each fit wrote (report.json and
+plot_data.json in the curve's folder), so it never re-runs a fit.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .html_parts import e, figure, num, page, table
+from .plots import _pyplot
+from .text import display, estimate_text, interval_text, status_text
+
+__all__ = ["write_summary_html", "render_summary_html", "write_plot_data"]
+
+_PARAMS = ("work_of_adhesion", "mu_h")
+
+
+def write_plot_data(result: Any, path: str | Path) -> Path | None:
+    """Save the data and the reported fit's model curve (SI) for the batch figure; None when the result
+    holds no curve."""
+    try:
+        c = result.curve
+        mc = dict(result.fits[result.reported_slip].model_curve)
+        d = {"control": c.control, "x": np.asarray(c.x, float).tolist(),
+             "force": np.asarray(c.force, float).tolist(),
+             "model": {k: np.asarray(mc[k], float).tolist() for k in
+                       ("x_loading", "force_loading", "x_unloading", "force_unloading") if k in mc}}
+    except (AttributeError, KeyError, TypeError):
+        return None
+    d = json.loads(json.dumps(d).replace("NaN", "null"))
+    path = Path(path)
+    path.write_text(json.dumps(d), encoding="utf-8")
+    return path
+
+
+def _load(row: Mapping[str, Any], name: str) -> dict | None:
+    folder = row.get("report_dir")
+    if not folder or row.get("status") != "ok":
+        return None
+    try:
+        return json.loads((Path(folder) / name).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def _labels(rows: Sequence[Mapping[str, Any]], base: Path) -> list[str]:
+    """Short names: the path below the common folder, without ``.csv``; when every file has the same
+    name (``*/curve.csv``), its folder."""
+    files = [Path(str(r.get("file", ""))) for r in rows]
+    rel = []
+    for f in files:
+        try:
+            rel.append(f.resolve().relative_to(base.resolve()).with_suffix(""))
+        except ValueError:
+            rel.append(Path(f.stem))
+    from collections import Counter  # noqa: PLC0415
+    shared = Counter(r.name for r in rel)
+    return [str(r.parent) if shared[r.name] > 1 and str(r.parent) != "." else str(r) for r in rel]
+
+
+def _intervals(reports: list[dict | None], name: str):
+    """Per curve: value, lower and upper error (nan where missing) and the status."""
+    out = []
+    for rep in reports:
+        est = ((rep or {}).get("parameters") or {}).get(name) or {}
+        ci = est.get("ci95") or [None, None]
+        v = est.get("value")
+        lo, hi = (ci + [None, None])[:2] if isinstance(ci, list) else (None, None)
+        out.append((v, lo, hi, status_text(est) if est else "failed"))
+    return out
+
+
+def _across(reports: list[dict | None], labels: list[str]):
+    plt = _pyplot()
+    n = len(reports)
+    fig, axes = plt.subplots(1, 2, figsize=(9.0, max(2.2, 0.32 * n + 1.2)), layout="constrained", sharey=True)
+    y = np.arange(n)[::-1]
+    for ax, name in zip(axes, _PARAMS):
+        sym, _, k, unit = display(name)
+        for yi, (v, lo, hi, status) in zip(y, _intervals(reports, name)):
+            if status == "determined" and v is not None:
+                err = [[v - lo if lo is not None else 0.0], [hi - v if hi is not None else 0.0]]
+                ax.errorbar([v * k], [yi], xerr=np.array(err) * k, fmt="o", color="#1f77b4", ms=4, capsize=3)
+            elif status in ("lower_bound", "upper_bound") and (lo if status == "lower_bound" else hi) is not None:
+                b = (lo if status == "lower_bound" else hi) * k
+                ax.plot([b], [yi], "|", color="#e69500", ms=10)
+                ax.annotate("", xy=(b * (1.25 if status == "lower_bound" else 0.8), yi), xytext=(b, yi),
+                            arrowprops={"arrowstyle": "->", "color": "#e69500"})
+            else:
+                ax.text(0.02, yi, "not determined" if status != "failed" else "failed", va="center",
+                        fontsize=7, color="#b00", transform=ax.get_yaxis_transform())
+        ax.set_xlabel(f"{sym} ({unit})")
+        ax.grid(axis="x", color="0.9")
+    axes[0].set_yticks(y, [lbl if len(lbl) < 40 else "…" + lbl[-38:] for lbl in labels], fontsize=7)
+    axes[0].set_ylim(-0.7, n - 0.3)
+    return fig
+
+
+def _multiples(plots: list[dict | None], labels: list[str], reports: list[dict | None]):
+    plt = _pyplot()
+    n = len(plots)
+    cols = min(4, n)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.1 * rows), layout="constrained", squeeze=False)
+    for i, ax in enumerate(axes.flat):
+        if i >= n:
+            ax.set_visible(False)
+            continue
+        d = plots[i]
+        ax.set_title(labels[i] if len(labels[i]) < 34 else "…" + labels[i][-32:], fontsize=7)
+        ax.tick_params(labelsize=6)
+        if not d:
+            ax.text(0.5, 0.5, "no fit", ha="center", va="center", transform=ax.transAxes, color="#b00")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            continue
+        kx = 1e6 if d.get("control") == "displacement" else 1e-3
+        ax.plot(np.asarray(d["x"], float) * kx, np.asarray(d["force"], float) * 1e3, ".", ms=2, color="#1f77b4",
+                alpha=0.6)
+        m = d.get("model") or {}
+        for part in ("loading", "unloading"):
+            if f"x_{part}" in m:
+                ax.plot(np.asarray(m[f"x_{part}"], float) * kx, np.asarray(m[f"force_{part}"], float) * 1e3,
+                        "-", color="#d62728", lw=0.9)
+        ax.axhline(0.0, color="0.7", lw=0.5)
+        slip = ((reports[i] or {}).get("slip") or {}).get("parameters_from") or ""
+        ax.text(0.03, 0.95, slip, transform=ax.transAxes, fontsize=6, va="top")
+    fig.supxlabel("displacement (µm) or pressure (kPa), as measured", fontsize=8)
+    fig.supylabel("force (mN)", fontsize=8)
+    return fig
+
+
+def _row_html(i: int, row: Mapping[str, Any], rep: dict | None, label: str, outdir: Path) -> list[str]:
+    link = e(label)
+    if row.get("report_dir"):
+        href = os.path.relpath(Path(str(row["report_dir"])) / "report.html", outdir).replace(os.sep, "/")
+        link = f"<a href=\"{e(href)}\">{e(label)}</a>"
+    if row.get("status") != "ok" or rep is None:
+        return [str(i), f"{link}<br><span class=\"status-failed\">failed:</span> <span class=\"muted\">"
+                f"{e(row.get('error', ''))}</span>", "", "", "", "", "", "", ""]
+    params = rep.get("parameters") or {}
+    cells = []
+    for name in _PARAMS:
+        est = params.get(name) or {}
+        st = status_text(est)
+        k = display(name)[2]
+        if st == "determined":
+            se = est.get("stderr")
+            cells += [num(est["value"] * k) + ("" if se is None else f" ± {num(se * k, 2)}"),
+                      e(interval_text(name, est, unit=False))]
+        else:
+            cells += [f"<span class=\"status-{e(st)}\">{e(estimate_text(name, est))}</span>", ""]
+    slip = rep.get("slip") or {}
+    fits = rep.get("fits") or {}
+    redchi = (fits.get(slip.get("parameters_from") or "") or {}).get("redchi")
+    nw = len(rep.get("warnings") or [])
+    return [str(i), link, *cells, e(slip.get("verdict", "")), num(redchi, 3),
+            f"<b>{nw}</b>" if nw else "0"]
+
+
+def render_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -> str:
+    """The batch summary page (self-contained) from the summary.csv rows of a batch."""
+    outdir = Path(outdir)
+    reports = [_load(r, "report.json") for r in rows]
+    plots = [_load(r, "plot_data.json") for r in rows]
+    files = [Path(str(r.get("file", ""))).resolve() for r in rows]
+    base = Path(os.path.commonpath([str(f.parent) for f in files])) if files else Path(".")
+    labels = _labels(rows, base)
+    ok = sum(1 for r in rows if r.get("status") == "ok")
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    body = [f"<h1>adhfit batch: {len(rows)} curves</h1>",
+            f"<p class=\"muted\">{ok} fitted, {len(rows) - ok} failed; files under <code>{e(base)}</code>; "
+            f"generated {now}. Values: value ± standard error, and the 95 % interval; a one-sided bound or an "
+            "undetermined value says so. The table "
+            "<code>summary.csv</code> next to this page holds the same numbers in SI.</p>"]
+    hdr = ["#", "curve (link: its report)", "W_ad (J/m²)", "W_ad 95 %", "μh (N/m)", "μh 95 %", "slip",
+           "reduced χ²", "warnings"]
+    body.append(table(hdr, [_row_html(i + 1, r, rep, lbl, outdir)
+                            for i, (r, rep, lbl) in enumerate(zip(rows, reports, labels))], numeric=(0, 2, 3, 4, 5, 7, 8)))
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+    if rows:
+        for fig, title, caption in ((_across(reports, labels), "values",
+                                     "W_ad and μh of every curve with 95 % intervals (an orange arrow: a one-sided bound)"),
+                                    (_multiples(plots, labels, reports), "curves",
+                                     "Every curve (blue: data) with its reported fit (red)")):
+            body.append(f"<h2>{e(caption)}</h2>" + figure(title, fig, " "))
+            plt.close(fig)
+    return page(f"adhfit batch: {len(rows)} curves", body).replace("max-width:62em", "max-width:80em", 1)
+
+
+def write_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -> Path:
+    """Write ``outdir/summary.html`` (see :func:`render_summary_html`); returns its path."""
+    path = Path(outdir) / "summary.html"
+    path.write_text(render_summary_html(rows, outdir), encoding="utf-8")
+    return path
