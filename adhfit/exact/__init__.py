@@ -1,0 +1,1 @@
+"""The exact incompressible neo-Hookean membrane (no large-stretch approximation)."""

@@ -1,0 +1,151 @@
+"""Compiled kernels of the exact neo-Hookean membrane: the ODEs in the material coordinate and a
+fixed-step 8th-order Runge-Kutta integrator (Dormand-Prince 8(5,3) weights, used without error
+control on a graded mesh).
+
+Everything is dimensionless: lengths over b, tensions over mu h, pressure as p = P b/(2 mu h) (so
+P b/(mu h) = 2p), the material coordinate rho over b (0 <= rho <= beta = 1/lambda0).
+
+State of a free (non-contacting) segment: ``(r, z, theta, lambda1, u, v)``; of a contacting segment on
+the substrate (frictionless, tangential equilibrium kept): ``(r, lambda1, u, v)``. ``u`` accumulates
+the stored energy U/(mu h b^2) = pi * int (I1 - 3) rho d rho and ``v`` the enclosed volume
+V/b^3 = pi * int r^2 dz (both used only by energy checks).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from scipy.integrate._ivp import dop853_coefficients as _dc
+
+_NS = 12
+A = np.ascontiguousarray(_dc.A[:_NS, :_NS], dtype=np.float64)
+B = np.ascontiguousarray(_dc.B[:_NS], dtype=np.float64)
+C = np.ascontiguousarray(_dc.C[:_NS], dtype=np.float64)
+
+FREE = 0
+CONTACT = 1
+START = 1e-3  # apex series start, as a fraction of the segment end
+
+
+@njit(cache=True)
+def tensions(l1, l2):
+    """Neo-Hookean line tensions over mu h (paper eqs. 8-9)."""
+    j = 1.0 / (l1 * l2) ** 3
+    return l1 / l2 - j, l2 / l1 - j
+
+
+@njit(cache=True)
+def _dt1(l1, l2):
+    d1 = 1.0 / l2 + 3.0 / (l1 ** 4 * l2 ** 3)
+    d2 = -l1 / l2 ** 2 + 3.0 / (l1 ** 3 * l2 ** 4)
+    return d1, d2
+
+
+@njit(cache=True)
+def _lambda1_rate(rho, r, l1, c):
+    """d lambda1/d rho from d(T1 r)/d rho = T2 dr/d rho (tangential equilibrium, eq. 4)."""
+    l2 = r / rho
+    t1, t2 = tensions(l1, l2)
+    d1, d2 = _dt1(l1, l2)
+    l2p = (l1 * c - l2) / rho
+    t1p = (t2 - t1) * l1 * c / r
+    return (t1p - d2 * l2p) / d1
+
+
+@njit(cache=True)
+def _rhs(kind, rho, y, par, out):
+    if kind == FREE:
+        r, th, l1 = y[0], y[2], y[3]
+        l2 = r / rho
+        t1, t2 = tensions(l1, l2)
+        c = math.cos(th)
+        s = math.sin(th)
+        out[0] = l1 * c
+        out[1] = l1 * s
+        out[2] = l1 * (2.0 * par - t2 * s / r) / t1
+        out[3] = _lambda1_rate(rho, r, l1, c)
+        out[4] = math.pi * (l1 * l1 + l2 * l2 + 1.0 / (l1 * l2) ** 2 - 3.0) * rho
+        out[5] = math.pi * r * r * l1 * s
+    else:
+        r, l1 = y[0], y[1]
+        l2 = r / rho
+        s = -r * par
+        c = math.sqrt(1.0 - s * s)
+        out[0] = l1 * c
+        out[1] = _lambda1_rate(rho, r, l1, c)
+        out[2] = math.pi * (l1 * l1 + l2 * l2 + 1.0 / (l1 * l2) ** 2 - 3.0) * rho
+        out[3] = math.pi * r * r * l1 * s
+
+
+@njit(cache=True)
+def integrate(kind, y0, rho1, rho2, eps, n, par, A, B, C):
+    """Integrate from rho1 to rho2 in n fixed steps of s on the graded mesh rho = rho1 + eps sinh(K s).
+
+    eps sets the grading (steps ~ eps near rho1, geometric growth beyond); K = asinh((rho2-rho1)/eps).
+    """
+    m = y0.shape[0]
+    y = y0.copy()
+    if rho2 == rho1:
+        return y
+    K = math.asinh((rho2 - rho1) / eps)
+    h = 1.0 / n
+    k = np.empty((12, m))
+    yt = np.empty(m)
+    f = np.empty(m)
+    for i in range(n):
+        s0 = i * h
+        for j in range(12):
+            for q in range(m):
+                acc = y[q]
+                for l in range(j):
+                    acc += h * A[j, l] * k[l, q]
+                yt[q] = acc
+            sj = s0 + C[j] * h
+            rho = rho1 + eps * math.sinh(K * sj)
+            jac = eps * K * math.cosh(K * sj)
+            _rhs(kind, rho, yt, par, f)
+            for q in range(m):
+                k[j, q] = f[q] * jac
+        for q in range(m):
+            acc = 0.0
+            for j in range(12):
+                acc += B[j] * k[j, q]
+            y[q] += h * acc
+    return y
+
+
+@njit(cache=True)
+def _apex(kind, lc, rho, par):
+    """Regular series at the apex (lambda1 = lambda2 = lc): start values at small rho."""
+    tc = 1.0 - lc ** -6
+    if kind == FREE:
+        k = lc * par / tc
+    else:
+        k = -lc * par
+    d1, d2 = _dt1(lc, lc)
+    a2 = lc * k * k * (3.0 * d2 - d1) / (16.0 * d1)
+    b3 = (a2 - 0.5 * lc * k * k) / 3.0
+    r = lc * rho + b3 * rho ** 3
+    l1 = lc + a2 * rho * rho
+    u = 0.5 * math.pi * (2.0 * lc * lc + lc ** -4 - 3.0) * rho * rho
+    if kind == FREE:
+        return np.array([r, 0.5 * lc * k * rho * rho, k * rho, l1, u, 0.0])
+    return np.array([r, l1, u, 0.0])
+
+
+@njit(cache=True)
+def from_apex(kind, lc, rho_end, n, par, A, B, C):
+    """Integrate a segment that starts at the apex (rho = 0) with centre stretch lc."""
+    rs0 = START * rho_end
+    y0 = _apex(kind, lc, rs0, par)
+    return integrate(kind, y0, rs0, rho_end, rs0, n, par, A, B, C)
+
+
+@njit(cache=True)
+def free_from_edge(y0, rho_a, beta, n, p, A, B, C):
+    """Integrate the free membrane from the contact edge rho_a to the clamp beta."""
+    eps = min(rho_a, beta - rho_a)
+    if eps <= 0.0:
+        return y0.copy()
+    return integrate(FREE, y0, rho_a, beta, eps, n, p, A, B, C)
