@@ -1,0 +1,181 @@
+"""A full loading history of the exact membrane: making contact, pinning, delamination (DESIGN A2)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from ..errors import ConvergenceError
+from .control import Control, prepare
+from .stages import Stage, delamination, making_contact, onset, pinning
+from .state import Config, State
+
+__all__ = ["ExactHistory", "exact_history", "COLUMNS"]
+
+COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
+
+
+@dataclass
+class ExactHistory:
+    """Same attributes as ``adhfit.loading.History``: ``columns``, ``summary``, ``inputs``."""
+
+    columns: dict
+    summary: dict
+    inputs: dict = field(default_factory=dict)
+    states: list = field(default_factory=list, repr=False)
+
+
+def _cluster(n):
+    return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
+
+
+def _split(points):
+    n_mc = max(4, round(0.3 * points))
+    n_pin = max(4, round(0.2 * points))
+    return n_mc, n_pin, max(5, points - n_mc - n_pin + 2)
+
+
+def march(stage: Stage, values, x0, depth: int = 0) -> list:
+    """Solve ``stage`` at each value in turn, continuing from the previous state (secant
+    predictor); a failed step is split in two (up to 8 times)."""
+    out, xs, vs = [], [], []
+    for v in values:
+        guess = list(x0) if not xs else list(xs[-1])
+        if len(xs) >= 2 and vs[-1] != vs[-2]:
+            t = (v - vs[-1]) / (vs[-1] - vs[-2])
+            guess = [a + t * (a - b) for a, b in zip(xs[-1], xs[-2])]
+        try:
+            st = stage.solve(v, guess)
+        except ConvergenceError:
+            if depth >= 8 or not vs:
+                raise
+            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1)
+            st = mid[-1]
+        out.append(st)
+        xs.append(stage.x(st))
+        vs.append(v)
+    return out
+
+
+def _loading(cfg: Config, c: Control) -> tuple[list, State]:
+    stage = making_contact(cfg, c.control, c.p, c.d)
+    free = c.free
+    a_vals = _cluster(c.n_mc)[1:] * c.a_max
+    x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
+    states = march(stage, a_vals, x0)
+    return [free] + states, states[-1]
+
+
+def _onset(cfg, c, m):
+    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    x = pin.x(m)
+    alpha, prev, prev_a = 0.0, m, 0.0
+    while True:
+        alpha += 0.04
+        if alpha > (0.5 * math.pi if c.slip == "frictionless" else math.pi):
+            raise ConvergenceError("exact pinning: G never reaches w", {"w": c.w})
+        st = march(pin, [alpha], x)[-1]
+        if st.G >= c.w:
+            break
+        prev, prev_a, x = st, alpha, pin.x(st)
+    t = (c.w - prev.G) / (st.G - prev.G)
+    guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
+    on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    k = len(pin.unknowns)
+    guess = guess[:1] + [prev_a + t * (alpha - prev_a)] + guess[1:k]
+    return on_stage.solve(c.w, guess), pin
+
+
+def _pinning(cfg, c, m):
+    on, pin = _onset(cfg, c, m)
+    u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))
+    states = march(pin, u[:-1] * on.alpha, pin.x(m)) if c.n_pin > 2 else []
+    return states + [on], on
+
+
+def _delamination(cfg, c, m, on):
+    stage = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    g = (1.0 - _cluster(c.n_del)[1:]) ** 1.5
+    g[-1] = min(g[-2] * 0.5, 1e-3)
+    rho = on.rho_a * g
+    states = march(stage, rho, stage.x(on))
+    return states, stage
+
+
+def _extremum(stage, states, key, sign):
+    """Refine the extremum of sign*key over the delamination path by a bounded Brent search."""
+    vals = [sign * key(s) for s in states]
+    i = int(np.argmin(vals))
+    if i == 0 or i == len(states) - 1:
+        return states[i], i
+    lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
+    cache = {}
+
+    def fun(r):
+        st = stage.solve(r, stage.x(states[i]))
+        cache[r] = st
+        return sign * key(st)
+
+    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-11 * hi})
+    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i])), None
+
+
+def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
+                  rs: float, lambda0: float, a_max: float | None = None, delta_max: float | None = None,
+                  p_max: float | None = None, points: int = 200, n: int = 64) -> ExactHistory:
+    """Compute a full history of the exact neo-Hookean membrane (DESIGN.md A2 columns).
+
+    Parameters
+    ----------
+    control, slip, p, d, w, rs, a_max, delta_max, p_max, points
+        As ``adhfit.simulate`` (dimensionless, DESIGN.md A1).
+    lambda0 : float
+        Pre-stretch, > 1; every observable depends on it.
+    n : int
+        Integration steps per membrane segment (64 gives ~1e-10 on the observables).
+
+    Returns
+    -------
+    ExactHistory
+        ``columns`` (the A2 columns as arrays), ``summary`` (the A2 ``--json`` object), ``inputs``.
+
+    Raises
+    ------
+    InputError
+        A parameter out of range.
+    ConvergenceError
+        A state outside the model's domain (Case I only: the membrane must not turn past vertical at
+        the clamp) or a failed solve.
+    """
+    c = prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points, n)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    mc, m = _loading(cfg, c)
+    pin, on = _pinning(cfg, c, m)
+    dl, stage = _delamination(cfg, c, m, on)
+    key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
+    sign = -1.0 if control == "displacement" else 1.0
+    turn, _ = _extremum(stage, dl, key, sign)
+    fmin, _ = _extremum(stage, dl, lambda s: s.f, 1.0)
+    extra = sorted({id(s): s for s in (turn, fmin)}.values(), key=lambda s: -s.rho_a)
+    dl = sorted(dl + [s for s in extra if s not in dl], key=lambda s: -s.rho_a)
+    return _assemble(c, mc, pin, dl, m, on, turn, fmin)
+
+
+def _row(st, c):
+    return {"f": st.f, "delta": c.delta(st), "p": st.p, "a": st.a}
+
+
+def _assemble(c, mc, pin, dl, m, on, turn, fmin):
+    rows = [("making_contact", s) for s in mc] + [("pinning", s) for s in pin] + \
+           [("delamination", s) for s in dl]
+    turn_i = next(i for i, (_, s) in enumerate(rows) if s is turn)
+    cols = {"stage": np.array([r[0] for r in rows])}
+    for k in ("a", "alpha", "p", "d", "f", "G"):
+        cols[k] = np.array([getattr(s, k) for _, s in rows], dtype=float)
+    cols["G"][: len(mc)] = 0.0
+    cols["delta"] = np.array([c.delta(s) for _, s in rows], dtype=float)
+    cols["stable"] = np.arange(len(rows)) <= turn_i
+    summary = {"f_max": m.f, "onset": _row(on, c), "f_min": _row(fmin, c), "turning_point": _row(turn, c)}
+    return ExactHistory(cols, summary, c.inputs(), [s for _, s in rows])
