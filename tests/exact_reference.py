@@ -99,3 +99,32 @@ def making_contact(p, lambda0, rs, rho_a):
     t1 = q / a
     f = math.pi * a * (a * p + t1 * a * crv)
     return a, y[1], f
+
+
+def _g23(alpha, l1p, l1m, l2):
+    t1p = _t(l1p, l2)[0]
+    q = l1m / l1p
+    return t1p * (1 - math.cos(alpha)) + 0.5 * ((l1p - l1m) ** 2 / (l1m * l2)
+                                                + (1 - 3 * q * q + 2 * q ** 3) / (l1m * l2) ** 3)
+
+
+def edge_state(p, lambda0, rs, lc, rho_a, alpha, edge, l1p=None):
+    """(r_end, d, f, G) of the state with contact field centre stretch lc, edge at rho_a, contact angle
+    alpha; edge 'frictionless' (T1+ cos alpha = T1-) or 'given' (lambda1+ = l1p)."""
+    beta = 1 / lambda0
+    crv = 0.0 if math.isinf(rs) else 1 / rs
+    rho0 = 1e-7 * rho_a
+    t = _t(lc, lc)[0]
+    sol = solve_ivp(_contact_rhs(crv), (rho0, rho_a), [lc * rho0, t * lc * rho0], method="DOP853",
+                    rtol=RTOL, atol=ATOL)
+    a, q = sol.y[:, -1]
+    l2 = a / rho_a
+    l1m = _l1_of(q / a, l2, l2)
+    if edge == "frictionless":
+        l1p = _l1_of(q / a / math.cos(alpha), l2, l2)
+    th = alpha - math.asin(a * crv)
+    z_a = -a * a * crv / (1 + math.sqrt(1 - (a * crv) ** 2))
+    t1p = _t(l1p, l2)[0]
+    y = _free_end(p, [a, z_a, th, t1p * a], rho_a, beta)
+    f = math.pi * a * (a * p - t1p * math.sin(th))
+    return y[0], y[1], f, _g23(alpha, l1p, l1m, l2)

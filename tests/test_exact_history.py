@@ -1,0 +1,111 @@
+"""Exact membrane histories: contact-edge states against the independent reference, the A2 contract,
+convergence to the large-stretch engine as lambda0 grows, and energy balances."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from adhfit import simulate
+from adhfit.exact.history import exact_history
+from adhfit.exact.stages import delamination, pinning
+from adhfit.exact.state import Config
+from tests import exact_reference as ref
+
+BASE = dict(p=0.6, w=0.2, rs=0.5, a_max=0.25)
+
+
+@pytest.fixture(scope="module", params=["frictionless", "no-slip"])
+def hist(request):
+    return request.param, exact_history("displacement", request.param, lambda0=1.2, points=40, **BASE)
+
+
+def test_columns_and_flags(hist):
+    slip, h = hist
+    c = h.columns
+    assert list(c["stage"][:1]) == ["making_contact"] and c["stage"][-1] == "delamination"
+    for k in ("a", "alpha", "d", "delta", "f", "G"):
+        assert np.all(np.isfinite(c[k])), k
+    turn = h.summary["turning_point"]
+    i = int(np.argmin(c["delta"]))
+    assert c["delta"][i] == pytest.approx(turn["delta"], abs=1e-12)
+    assert c["stable"][: i + 1].all() and not c["stable"][i + 1:].any()
+    assert c["a"][-1] <= 1e-3 * BASE["a_max"]
+    dl = c["stage"] == "delamination"
+    assert np.allclose(c["G"][dl], BASE["w"], atol=1e-10)
+
+
+def test_states_against_reference(hist):
+    """Every stage's states, re-shot by the independent solver from the same edge data."""
+    slip, h = hist
+    m = [s for s, st in zip(h.states, h.columns["stage"]) if st == "making_contact"][-1]
+    picks = [i for i in (len(h.states) // 3, len(h.states) // 2, -3)]
+    for i in picks:
+        s = h.states[i]
+        edge = "frictionless" if slip == "frictionless" else "given"
+        lc = s.lc if slip == "frictionless" else m.lc
+        r_end, d, f, G = ref.edge_state(0.6, 1.2, 0.5, lc, s.rho_a, s.alpha, edge, s.l1p)
+        assert r_end == pytest.approx(1.0, abs=1e-9)
+        assert (d, f, G) == pytest.approx((s.d, s.f, s.G), abs=1e-9)
+
+
+@pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
+def test_converges_to_large_stretch(slip):
+    ls = simulate("displacement", slip, **BASE).summary
+    errs = []
+    for lam0 in (5.0, 10.0):
+        ex = exact_history("displacement", slip, lambda0=lam0, points=30, **BASE).summary
+        errs.append(max(abs(ex["f_max"] - ls["f_max"]), abs(ex["f_min"]["f"] - ls["f_min"]["f"]),
+                        abs(ex["onset"]["delta"] - ls["onset"]["delta"]),
+                        abs(ex["turning_point"]["delta"] - ls["turning_point"]["delta"])))
+    assert errs[1] < 1e-6 and errs[1] < errs[0] / 20
+
+
+def test_simulate_exact_pressure_control():
+    r = simulate("pressure", "frictionless", d=0.2, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5,
+                 points=30, membrane="exact")
+    assert list(r.frame.columns) == ["stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable"]
+    assert np.allclose(r.frame["d"], 0.2, atol=1e-10)
+    assert r.summary["turning_point"]["p"] == pytest.approx(r.frame["p"].min(), abs=1e-12)
+
+
+def _cap_area(a, crv):
+    return 2 * math.pi * a * a / (1 + math.sqrt(1 - (a * crv) ** 2))
+
+
+@pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
+def test_energy_balance_pinning(slip):
+    """d(U - PV) = -F dd along pinning (the edge force does no work)."""
+    p, lam0 = 0.6, 1.2
+    h = exact_history("displacement", slip, lambda0=lam0, points=20, **BASE)
+    m = [s for s, st in zip(h.states, h.columns["stage"]) if st == "making_contact"][-1]
+    stage = pinning(Config(lam0, 2.0), "displacement", slip, m, p)
+    a0, da = 0.3, 1e-4
+    s_p, s_m, s_0 = (stage.solve(a0 + k * da, stage.x(m)) for k in (1, -1, 0))
+    dE = (s_p.u - 2 * p * s_p.v) - (s_m.u - 2 * p * s_m.v)
+    assert dE / (s_p.d - s_m.d) == pytest.approx(-2 * s_0.f, rel=1e-6)
+
+
+@pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
+def test_release_rate_from_stored_energy(slip):
+    """G = w on delamination, from d(U - PV) + F dd = W_ad dA (not from eq. 23).
+
+    dA is the substrate area swept by the peeled material, 2 pi a lambda1- |d rho_a| (the model binds
+    the adhesion energy to the material, as the paper does: frictionless pinning slides the edge with
+    no adhesive spreading force). For no slip it equals the change of the contact cap area.
+    """
+    p, lam0, w = 0.6, 1.2, 0.2
+    h = exact_history("displacement", slip, lambda0=lam0, points=20, **BASE)
+    stg = h.columns["stage"]
+    m = [s for s, st in zip(h.states, stg) if st == "making_contact"][-1]
+    on = [s for s, st in zip(h.states, stg) if st == "pinning"][-1]
+    stage = delamination(Config(lam0, 2.0), "displacement", slip, m, w, p)
+    r0, dr = 0.7 * on.rho_a, 1e-5
+    s_p, s_m = (stage.solve(r0 + k * dr, stage.x(on)) for k in (1, -1))
+    s_0 = stage.solve(r0, stage.x(on))
+    dE = (s_p.u - 2 * p * s_p.v) - (s_m.u - 2 * p * s_m.v)
+    dA = 2 * math.pi * s_0.a * s_0.l1m * (s_p.rho_a - s_m.rho_a)
+    if slip == "no-slip":
+        assert _cap_area(s_p.a, 2.0) - _cap_area(s_m.a, 2.0) == pytest.approx(dA, rel=1e-7)
+    assert (dE + 2 * s_0.f * (s_p.d - s_m.d)) / dA == pytest.approx(w, rel=1e-5)
