@@ -62,6 +62,21 @@ def test_converges_to_large_stretch(slip):
     assert errs[1] < 1e-6 and errs[1] < errs[0] / 20
 
 
+@pytest.mark.parametrize("control, slip, kw", [
+    ("displacement", "no-slip", dict(p=0.2, rs=math.inf)),  # turning point and f_min at the onset
+    ("displacement", "frictionless", dict(p=0.2, rs=math.inf)),
+    ("pressure", "frictionless", dict(d=-0.05, rs=0.5)),
+    ("pressure", "no-slip", dict(d=0.2, rs=0.5)),
+])
+def test_large_lambda0_matches_large_stretch(control, slip, kw):
+    ls = simulate(control, slip, w=0.2, a_max=0.25, **kw).summary
+    ex = exact_history(control, slip, w=0.2, a_max=0.25, lambda0=10.0, points=40, **kw).summary
+    for key in ("onset", "f_min", "turning_point"):
+        for q in ("f", "delta", "p", "a"):
+            # the neglected terms are O(lambda^-6): 1e-6 at lambda0 = 10
+            assert ex[key][q] == pytest.approx(ls[key][q], abs=2e-6), (key, q)
+
+
 def test_simulate_exact_pressure_control():
     r = simulate("pressure", "frictionless", d=0.2, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5,
                  points=30, membrane="exact")

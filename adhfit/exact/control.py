@@ -100,7 +100,7 @@ def _free_at_gap(d, lambda0, n) -> State:
     sgn = 1.0 if d > 0 else -1.0
 
     def resid(q):
-        return free_inflation(sgn * q, lambda0, n).d - d
+        return sgn * free_inflation(sgn * q, lambda0, n).d - abs(d)
 
     hi = 0.5
     while True:

@@ -156,10 +156,10 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     dl, stage = _delamination(cfg, c, m, on)
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
-    turn, _ = _extremum(stage, dl, key, sign)
-    fmin, _ = _extremum(stage, dl, lambda s: s.f, 1.0)
-    extra = sorted({id(s): s for s in (turn, fmin)}.values(), key=lambda s: -s.rho_a)
-    dl = sorted(dl + [s for s in extra if s not in dl], key=lambda s: -s.rho_a)
+    turn, _ = _extremum(stage, [on] + dl, key, sign)
+    fmin, _ = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
+    extra = [s for s in (turn, fmin) if s is not on and all(s is not t for t in dl)]
+    dl = sorted(dl + extra, key=lambda s: -s.rho_a)
     return _assemble(c, mc, pin, dl, m, on, turn, fmin)
 
 

@@ -7,7 +7,10 @@ control ``p`` joins the unknowns and the gap ``d`` the residuals.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+from ..errors import ConvergenceError
 
 from .solve import solve_state
 from .state import Config, State
@@ -34,7 +37,12 @@ class Stage:
             targets[self.param] = value
         else:
             fixed[self.param] = value
-        return solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets)
+        st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets)
+        if not st.theta_end < 0.5 * math.pi:
+            raise ConvergenceError("exact membrane: the free membrane turns past vertical at the clamp "
+                                   "(Case II, outside the model: Case I only)",
+                                   {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
+        return st
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""
