@@ -31,6 +31,7 @@ class Control:
     n_mc: int = 0
     n_pin: int = 0
     n_del: int = 0
+    _lc: float | None = None  # apex stretch of the last d0(p), for continuation
 
     @property
     def crv(self) -> float:
@@ -41,7 +42,9 @@ class Control:
         if self.control == "displacement":
             return self.free.d - st.d
         try:
-            return free_inflation(st.p, self.lambda0, self.n).d - st.d
+            fi = free_inflation(st.p, self.lambda0, self.n, self._lc)
+            self._lc = fi.lc
+            return fi.d - st.d
         except ConvergenceError:
             return math.nan
 

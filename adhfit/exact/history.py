@@ -10,7 +10,7 @@ from scipy.optimize import minimize_scalar
 from ..errors import ConvergenceError
 from .control import Control, prepare
 from .stages import Stage, delamination, making_contact, onset, pinning
-from .state import Config, State
+from .state import DEFAULT_N, Config, State
 
 __all__ = ["ExactHistory", "exact_history", "COLUMNS"]
 
@@ -124,7 +124,7 @@ def _extremum(stage, states, key, sign):
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
                   rs: float, lambda0: float, a_max: float | None = None, delta_max: float | None = None,
-                  p_max: float | None = None, points: int = 200, n: int = 64) -> ExactHistory:
+                  p_max: float | None = None, points: int = 200, n: int = DEFAULT_N) -> ExactHistory:
     """Compute a full history of the exact neo-Hookean membrane (DESIGN.md A2 columns).
 
     Parameters
@@ -134,7 +134,7 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     lambda0 : float
         Pre-stretch, > 1; every observable depends on it.
     n : int
-        Integration steps per membrane segment (64 gives ~1e-10 on the observables).
+        Integration steps per membrane segment (32 gives ~1e-9 on the observables).
 
     Returns
     -------

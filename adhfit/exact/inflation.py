@@ -7,12 +7,12 @@ from scipy.optimize import brentq
 
 from ..errors import ConvergenceError
 from . import kernels as K
-from .state import Config, State, evaluate
+from .state import DEFAULT_N, Config, State, evaluate
 
 __all__ = ["free_inflation", "apex_deflection"]
 
 
-def free_inflation(p: float, lambda0: float, n: int = 64) -> State:
+def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None) -> State:
     """The Case I free-inflation state at pressure p (lambda1 = lambda2 = lc at the apex).
 
     Parameters
@@ -23,6 +23,8 @@ def free_inflation(p: float, lambda0: float, n: int = 64) -> State:
         Pre-stretch (> 1).
     n : int
         Integration steps.
+    lc_guess : float, optional
+        A nearby apex stretch (continuation): Newton from it instead of a bracketing search.
 
     Returns
     -------
@@ -42,12 +44,9 @@ def free_inflation(p: float, lambda0: float, n: int = 64) -> State:
     def resid(lc):
         return float(K.from_apex(K.FREE, lc, cfg.beta, n, q, K.A, K.B, K.C)[0]) - 1.0
 
-    lo, hi = lambda0, lambda0 * 1.05
-    while resid(hi) < 0.0:
-        lo, hi = hi, hi * 1.2
-        if hi > 1e3 * lambda0:
-            raise ConvergenceError("exact free inflation", {"p": p, "lambda0": lambda0})
-    lc = brentq(resid, lo, hi, xtol=1e-15, rtol=1e-15)
+    lc = _newton(resid, lc_guess) if lc_guess is not None else None
+    if lc is None:
+        lc = _bracketed(resid, lambda0, p)
     st = evaluate(cfg, q, lc)
     if not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
         raise ConvergenceError("exact free inflation: no Case I state (theta > pi/2 at the clamp)",
@@ -57,6 +56,30 @@ def free_inflation(p: float, lambda0: float, n: int = 64) -> State:
     return st
 
 
-def apex_deflection(p: float, lambda0: float, n: int = 64) -> float:
+def apex_deflection(p: float, lambda0: float, n: int = DEFAULT_N) -> float:
     """d0(p): the apex deflection of the freely inflated exact membrane, over b."""
     return free_inflation(p, lambda0, n).d
+
+
+def _newton(resid, x):
+    """Secant-Newton from a close guess; None if it does not converge quickly."""
+    fx = resid(x)
+    for _ in range(12):
+        h = 1e-7 * x
+        dfx = (resid(x + h) - fx) / h
+        if not (math.isfinite(fx) and math.isfinite(dfx)) or dfx <= 0.0:
+            return None
+        x = x - fx / dfx
+        fx = resid(x)
+        if abs(fx) < 1e-14:
+            return x
+    return None
+
+
+def _bracketed(resid, lambda0, p):
+    lo, hi = lambda0, lambda0 * 1.05
+    while resid(hi) < 0.0:
+        lo, hi = hi, hi * 1.2
+        if hi > 1e3 * lambda0:
+            raise ConvergenceError("exact free inflation", {"p": p, "lambda0": lambda0})
+    return brentq(resid, lo, hi, xtol=1e-15, rtol=1e-15)

@@ -149,3 +149,66 @@ def free_from_edge(y0, rho_a, beta, n, p, A, B, C):
     if eps <= 0.0:
         return y0.copy()
     return integrate(FREE, y0, rho_a, beta, eps, n, p, A, B, C)
+
+
+CONTINUOUS = 0
+FRICTIONLESS = 1
+GIVEN = 2
+N_OUT = 11  # r_end, d, theta_end, a, f, G, l1m, l1p, l2, u, v
+
+
+@njit(cache=True)
+def l1_frictionless(l1m, l2, alpha):
+    """lambda1+ from t1(lambda1+, l2) cos(alpha) = t1(lambda1-, l2) (t1 increases with lambda1)."""
+    ca = math.cos(alpha)
+    target = tensions(l1m, l2)[0] / ca
+    x = l1m / math.sqrt(ca)
+    for _ in range(60):
+        t = tensions(x, l2)[0]
+        d1 = 1.0 / l2 + 3.0 / (x ** 4 * l2 ** 3)
+        step = (t - target) / d1
+        x = max(x - step, 0.5 * x)
+        if abs(step) < 1e-15 * x:
+            break
+    return x
+
+
+@njit(cache=True)
+def release_rate(alpha, l1p, l1m, l2):
+    """Energy release rate over mu h, paper eq. (23) with the exact tension T1+."""
+    t1p = tensions(l1p, l2)[0]
+    q = l1m / l1p
+    return (t1p * (1.0 - math.cos(alpha))
+            + 0.5 * ((l1p - l1m) ** 2 / (l1m * l2) + (1.0 - 3.0 * q * q + 2.0 * q ** 3) / (l1m * l2) ** 3))
+
+
+@njit(cache=True)
+def shot(edge, p, crv, beta, n, lc, rho_a, alpha, l1p, A, B, C):
+    """One state shot from the apex to the clamp; returns the N_OUT observables (see state.py)."""
+    out = np.empty(N_OUT)
+    if rho_a <= 0.0:
+        y = from_apex(FREE, lc, beta, n, p, A, B, C)
+        out[0], out[1], out[2] = y[0], y[1], y[2]
+        out[3] = out[4] = out[5] = 0.0
+        out[6] = out[7] = out[8] = lc
+        out[9], out[10] = y[4], y[5]
+        return out
+    yc = from_apex(CONTACT, lc, rho_a, n, crv, A, B, C)
+    a, l1m = yc[0], yc[1]
+    l2 = a / rho_a
+    if edge == CONTINUOUS:
+        l1p = l1m
+    elif edge == FRICTIONLESS:
+        l1p = l1_frictionless(l1m, l2, alpha)
+    theta_a = alpha - math.asin(min(a * crv, 1.0))
+    drop = a * a * crv / (1.0 + math.sqrt(max(1.0 - (a * crv) ** 2, 0.0)))
+    y0 = np.array([a, -drop, theta_a, l1p, yc[2], yc[3]])
+    y = free_from_edge(y0, rho_a, beta, n, p, A, B, C)
+    t1p = tensions(l1p, l2)[0]
+    out[0], out[1], out[2] = y[0], y[1], y[2]
+    out[3] = a
+    out[4] = math.pi * a * (a * p - t1p * math.sin(theta_a))
+    out[5] = release_rate(alpha, l1p, l1m, l2)
+    out[6], out[7], out[8] = l1m, l1p, l2
+    out[9], out[10] = y[4], y[5]
+    return out

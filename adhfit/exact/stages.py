@@ -8,7 +8,7 @@ control ``p`` joins the unknowns and the gap ``d`` the residuals.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..errors import ConvergenceError
 
@@ -29,6 +29,7 @@ class Stage:
     residuals: tuple
     targets: dict
     param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
+    memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
 
     def solve(self, value: float, x0) -> State:
         """The state at parameter ``value``, Newton from the guess ``x0`` (ordered as unknowns)."""
@@ -37,7 +38,8 @@ class Stage:
             targets[self.param] = value
         else:
             fixed[self.param] = value
-        st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets)
+        st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets,
+                         memo=self.memo)
         if not st.theta_end < 0.5 * math.pi:
             raise ConvergenceError("exact membrane: the free membrane turns past vertical at the clamp "
                                    "(Case II, outside the model: Case I only)",
