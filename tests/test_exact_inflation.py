@@ -23,9 +23,10 @@ def _closed_d0(p):
 @pytest.mark.parametrize("p, lambda0", [(0.6, 1.1), (0.6, 1.5), (-0.4, 1.3)])
 def test_free_inflation_matches_reference(p, lambda0):
     d0_ref, lc_ref = ref.free_inflation(abs(p), lambda0)
-    st = free_inflation(p, lambda0)
+    st = free_inflation(p, lambda0, n=64)
     assert st.d == pytest.approx(math.copysign(d0_ref, p), abs=1e-9)
     assert st.lc == pytest.approx(lc_ref, rel=1e-9)
+    assert free_inflation(p, lambda0).d == pytest.approx(math.copysign(d0_ref, p), abs=1e-7)  # default n
 
 
 def test_free_inflation_design_numbers():
@@ -53,7 +54,7 @@ def test_step_halving():
 def test_making_contact_matches_reference(rs):
     p, lam0, rho_a = 0.6, 1.2, 0.1
     a, d, f = ref.making_contact(p, lam0, rs, rho_a)
-    cfg = Config(lam0, 0.0 if math.isinf(rs) else 1 / rs)
+    cfg = Config(lam0, 0.0 if math.isinf(rs) else 1 / rs, 64)
     fi = free_inflation(p, lam0)
     st = solve_state(cfg, "continuous", {"p": p, "rho_a": rho_a}, ("lc",), (fi.lc,), ("clamp",), {})
     assert st.a == pytest.approx(a, abs=1e-9)
