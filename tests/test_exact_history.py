@@ -125,3 +125,25 @@ def test_release_rate_from_stored_energy(slip):
     if slip == "no-slip":
         assert _cap_area(s_p.a, 2.0) - _cap_area(s_m.a, 2.0) == pytest.approx(dA, rel=1e-7)
     assert (dE + 2 * s_0.f * (s_p.d - s_m.d)) / dA == pytest.approx(w, rel=1e-5)
+
+
+def test_loading_end_from_delta_max_and_p_max():
+    h = exact_history("displacement", "frictionless", p=0.6, w=0.2, rs=0.5, delta_max=0.2, lambda0=1.3,
+                      points=20)
+    i = int(np.argmax(h.columns["f"]))
+    assert h.columns["delta"][i] == pytest.approx(0.2, abs=1e-10)
+    h = exact_history("pressure", "no-slip", d=0.2, w=0.2, rs=0.5, p_max=0.6, lambda0=1.3, points=20)
+    assert h.columns["p"][h.columns["stage"] == "making_contact"].max() == pytest.approx(0.6, abs=1e-10)
+
+
+@pytest.mark.parametrize("kw, name", [
+    (dict(p=0.95, lambda0=1.05, a_max=0.25), "p"),  # no Case I free inflation
+    (dict(p=0.6, lambda0=1.0, a_max=0.25), "lambda0"),
+    (dict(p=0.6, lambda0=1.2, delta_max=1.5), "delta_max"),  # beyond what loading reaches
+    (dict(p=0.6, lambda0=1.2, a_max=0.6), "a_max"),  # past the substrate's equator (rs = 0.5)
+])
+def test_input_errors_name_the_parameter(kw, name):
+    from adhfit.errors import InputError
+    with pytest.raises(InputError) as exc:
+        exact_history("displacement", "frictionless", w=0.2, rs=0.5, points=20, **kw)
+    assert exc.value.name == name

@@ -32,6 +32,7 @@ class Control:
     n_pin: int = 0
     n_del: int = 0
     _lc: float | None = None  # apex stretch of the last d0(p), for continuation
+    end: tuple = ("a_max", None)  # the loading end as given
 
     @property
     def crv(self) -> float:
@@ -77,19 +78,32 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
         _check("p", p, -1.0, 1.0, "a float in (-1, 1) under displacement control")
         if p <= -(0.0 if math.isinf(rs) else 1.0 / rs):
             raise InputError("p", p, "a float > -1/rs (the membrane must be pressed onto the substrate)")
-        free = free_inflation(p, lambda0, n)
+        try:
+            free = free_inflation(p, lambda0, n)
+        except ConvergenceError as exc:
+            raise InputError("p", p, f"a pressure with a Case I free inflation at lambda0 = {lambda0}",
+                             "The exact membrane would turn past vertical at the clamp (Case II is not "
+                             "modelled): lower |p| or raise lambda0.") from exc
     else:
         _check("d", d, -1.0, 1.0, "a float in (-1, 1) under pressure control")
         free = _free_at_gap(d, lambda0, n)
     ends = [(k, v) for k, v in (("a_max", a_max), ("delta_max", delta_max), ("p_max", p_max)) if v is not None]
     if len(ends) != 1:
         raise InputError("a_max", a_max, "exactly one of a_max, delta_max, p_max")
-    if ends[0][0] != "a_max":
-        raise InputError(ends[0][0], ends[0][1], "not supported by the exact membrane yet (give a_max)")
-    _check("a_max", a_max, 0.0, 1.0, "a float in (0, 1) (contact radius over b)")
-    if not math.isinf(rs) and a_max >= rs:
-        raise InputError("a_max", a_max, f"a float below rs = {rs} (contact on the upper hemisphere)")
+    if delta_max is not None and control != "displacement":
+        raise InputError("delta_max", delta_max, "given under displacement control only (use p_max)")
+    if p_max is not None and control != "pressure":
+        raise InputError("p_max", p_max, "given under pressure control only (use delta_max)")
+    if a_max is not None:
+        _check("a_max", a_max, 0.0, 1.0, "a float in (0, 1) (contact radius over b)")
+        if not math.isinf(rs) and a_max >= rs:
+            raise InputError("a_max", a_max, f"a float below rs = {rs} (contact on the upper hemisphere)")
+    elif delta_max is not None:
+        _check("delta_max", delta_max, 0.0, 2.0, "a float in (0, 2) (displacement over b)")
+    else:
+        _check("p_max", p_max, free.p, 1e3, f"a float above the touching pressure {free.p:.6g}")
     c = Control(control, slip, p, d, w, rs, lambda0, a_max, int(points), n, free)
+    c.end = ends[0]
     c.n_mc = max(4, round(0.3 * points))
     c.n_pin = max(4, round(0.2 * points))
     c.n_del = max(5, points - c.n_mc - c.n_pin + 2)

@@ -5,9 +5,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq, minimize_scalar
 
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, InputError
 from .control import Control, prepare
 from .stages import Stage, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
@@ -59,9 +59,32 @@ def march(stage: Stage, values, x0, depth: int = 0) -> list:
     return out
 
 
+def _loading_end(stage: Stage, c: Control) -> float:
+    """a_max from delta_max or p_max: march the loading in a, then solve the end condition."""
+    name, target = c.end
+    value = (lambda s: c.free.d - s.d) if name == "delta_max" else (lambda s: s.p)
+    cap = 0.98 * min(1.0, c.rs)
+    a_prev, st_prev = 0.0, c.free
+    x = [c.free.lc, 0.01 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
+    for a in np.linspace(0.02 * cap, cap, 50):
+        try:
+            st = march(stage, [a], x)[-1]
+        except ConvergenceError:
+            break
+        if value(st) >= target:
+            def resid(aa):
+                return value(stage.solve(aa, stage.x(st))) - target
+            return brentq(resid, a_prev, a, xtol=1e-14, rtol=1e-14)
+        a_prev, st_prev, x = a, st, stage.x(st)
+    raise InputError(name, target, f"a value reached on loading (at most {value(st_prev):.6g} here, "
+                                   f"with contact radius {a_prev:.4g})")
+
+
 def _loading(cfg: Config, c: Control) -> tuple[list, State]:
     stage = making_contact(cfg, c.control, c.p, c.d)
     free = c.free
+    if c.a_max is None:
+        c.a_max = _loading_end(stage, c)
     a_vals = _cluster(c.n_mc)[1:] * c.a_max
     x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
     states = march(stage, a_vals, x0)
