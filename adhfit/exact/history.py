@@ -37,15 +37,29 @@ def _split(points):
     return n_mc, n_pin, max(5, points - n_mc - n_pin + 2)
 
 
+def _predict(v, vs, xs, x0):
+    """Lagrange extrapolation through the last (up to) three solved states."""
+    k = min(len(xs), 3)
+    if k == 0:
+        return list(x0)
+    if len(set(vs[-k:])) < k:
+        return list(xs[-1])
+    out = np.zeros(len(xs[-1]))
+    for i in range(1, k + 1):
+        li = 1.0
+        for j in range(1, k + 1):
+            if j != i:
+                li *= (v - vs[-j]) / (vs[-i] - vs[-j])
+        out += li * np.asarray(xs[-i])
+    return list(out)
+
+
 def march(stage: Stage, values, x0, depth: int = 0) -> list:
     """Solve ``stage`` at each value in turn, continuing from the previous state (secant
     predictor); a failed step is split in two (up to 8 times)."""
     out, xs, vs = [], [], []
     for v in values:
-        guess = list(x0) if not xs else list(xs[-1])
-        if len(xs) >= 2 and vs[-1] != vs[-2]:
-            t = (v - vs[-1]) / (vs[-1] - vs[-2])
-            guess = [a + t * (a - b) for a, b in zip(xs[-1], xs[-2])]
+        guess = _predict(v, vs, xs, x0)
         try:
             st = stage.solve(v, guess)
         except ConvergenceError:
@@ -141,7 +155,7 @@ def _extremum(stage, states, key, sign):
         cache[r] = st
         return sign * key(st)
 
-    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-11 * hi})
+    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-8 * hi})
     return cache.get(res.x) or stage.solve(res.x, stage.x(states[i])), None
 
 

@@ -48,7 +48,7 @@ def _at(cfg, edge, fixed, unknowns, x):
 
 
 def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residuals: tuple,
-                targets: dict, *, tol: float = 1e-12, max_iter: int = 40, memo: dict | None = None) -> State:
+                targets: dict, *, tol: float = 1e-11, max_iter: int = 40, memo: dict | None = None) -> State:
     """Solve ``residuals`` = 0 for ``unknowns``.
 
     Newton with a forward-difference Jacobian; with ``memo`` (a dict kept between calls of one
