@@ -185,8 +185,8 @@ def release_rate(alpha, l1p, l1m, l2):
 @njit(cache=True)
 def shot(edge, p, crv, beta, n, lc, rho_a, alpha, l1p, A, B, C):
     """One state shot from the apex to the clamp; returns the N_OUT observables (see state.py)."""
-    out = np.empty(N_OUT)
     if rho_a <= 0.0:
+        out = np.empty(N_OUT)
         y = from_apex(FREE, lc, beta, n, p, A, B, C)
         out[0], out[1], out[2] = y[0], y[1], y[2]
         out[3] = out[4] = out[5] = 0.0
@@ -194,6 +194,13 @@ def shot(edge, p, crv, beta, n, lc, rho_a, alpha, l1p, A, B, C):
         out[9], out[10] = y[4], y[5]
         return out
     yc = from_apex(CONTACT, lc, rho_a, n, crv, A, B, C)
+    return shot_from_edge(edge, p, crv, beta, n, yc, rho_a, alpha, l1p, A, B, C)
+
+
+@njit(cache=True)
+def shot_from_edge(edge, p, crv, beta, n, yc, rho_a, alpha, l1p, A, B, C):
+    """The free part of a shot, given the contact field's end state ``yc`` = (a, lambda1-, u, v)."""
+    out = np.empty(N_OUT)
     a, l1m = yc[0], yc[1]
     l2 = a / rho_a
     if edge == CONTINUOUS:

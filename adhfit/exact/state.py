@@ -62,13 +62,31 @@ def release_rate(alpha: float, l1p: float, l1m: float, l2: float) -> float:
     return float(K.release_rate(alpha, l1p, l1m, l2))
 
 
+_LAST: dict = {}
+
+
+def _contact(cfg: Config, lc: float, rho_a: float):
+    """The contact field's end state, remembered for the last (lc, rho_a): Newton steps and
+    difference quotients in alpha or lambda1+ (no slip) do not change it."""
+    key = (lc, rho_a, cfg.crv, cfg.n)
+    if _LAST.get("key") != key:
+        _LAST["key"] = key
+        _LAST["yc"] = K.from_apex(K.CONTACT, lc, rho_a, cfg.n, cfg.crv, K.A, K.B, K.C)
+    return _LAST["yc"]
+
+
 _EDGES = {"continuous": K.CONTINUOUS, "frictionless": K.FRICTIONLESS, "given": K.GIVEN}
 
 
 def evaluate(cfg: Config, p: float, lc: float, rho_a: float = 0.0, alpha: float = 0.0,
              edge: str = "continuous", l1p: float | None = None) -> State:
     """Shoot one state from the apex to the clamp (see the module docstring for the arguments)."""
-    o = K.shot(_EDGES[edge], p, cfg.crv, cfg.beta, cfg.n, lc, max(rho_a, 0.0), alpha,
-               0.0 if l1p is None else l1p, K.A, K.B, K.C)
+    rho_a = max(rho_a, 0.0)
+    l1 = 0.0 if l1p is None else l1p
+    if rho_a == 0.0:
+        o = K.shot(_EDGES[edge], p, cfg.crv, cfg.beta, cfg.n, lc, 0.0, alpha, l1, K.A, K.B, K.C)
+    else:
+        o = K.shot_from_edge(_EDGES[edge], p, cfg.crv, cfg.beta, cfg.n, _contact(cfg, lc, rho_a), rho_a,
+                             alpha, l1, K.A, K.B, K.C)
     r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = (float(x) for x in o)
-    return State(lc, max(rho_a, 0.0), alpha, p, a, d, f, G, r_end, th, l1m, l1p_, l2, u, v)
+    return State(lc, rho_a, alpha, p, a, d, f, G, r_end, th, l1m, l1p_, l2, u, v)
