@@ -70,7 +70,7 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
     if slip not in ("no-slip", "frictionless"):
         raise InputError("slip", slip, "'no-slip' or 'frictionless'")
     _check("lambda0", lambda0, 1.0, 100.0, "a float in (1, 100]", hi_open=False)
-    _check("w", w, 0.0, 10.0, "a float in (0, 10]", hi_open=False)
+    _check("w", w, 1e-6, 10.0, "a float in [1e-6, 10]", lo_open=False, hi_open=False)
     _check("rs", rs, 0.02, math.inf, "a float in [0.02, inf] (inf: flat substrate)", lo_open=False,
            hi_open=False)
     _check("points", points, 9, 100000, "an integer in [10, 100000]")
@@ -95,9 +95,11 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
     if p_max is not None and control != "pressure":
         raise InputError("p_max", p_max, "given under pressure control only (use delta_max)")
     if a_max is not None:
-        _check("a_max", a_max, 0.0, 1.0, "a float in (0, 1) (contact radius over b)")
-        if not math.isinf(rs) and a_max >= rs:
-            raise InputError("a_max", a_max, f"a float below rs = {rs} (contact on the upper hemisphere)")
+        _check("a_max", a_max, 1e-3, 0.95, "a float in [1e-3, 0.95] (contact radius over b)",
+               lo_open=False, hi_open=False)
+        if not math.isinf(rs) and a_max > 0.95 * rs:
+            raise InputError("a_max", a_max, f"a float <= 0.95 rs = {0.95 * rs:.6g} (contact on the upper "
+                             "hemisphere of the substrate)")
     elif delta_max is not None:
         _check("delta_max", delta_max, 0.0, 2.0, "a float in (0, 2) (displacement over b)")
     else:

@@ -77,7 +77,7 @@ def _loading_end(stage: Stage, c: Control) -> float:
     """a_max from delta_max or p_max: march the loading in a, then solve the end condition."""
     name, target = c.end
     value = (lambda s: c.free.d - s.d) if name == "delta_max" else (lambda s: s.p)
-    cap = 0.98 * min(1.0, c.rs)
+    cap = 0.95 * min(1.0, c.rs)
     a_prev, st_prev = 0.0, c.free
     x = [c.free.lc, 0.01 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
     for a in np.linspace(0.02 * cap, cap, 50):
