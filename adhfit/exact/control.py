@@ -87,7 +87,8 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
     else:
         _check("d", d, -1.0, 1.0, "a float in (-1, 1) under pressure control")
         free = _free_at_gap(d, lambda0, n)
-    ends = [(k, v) for k, v in (("a_max", a_max), ("delta_max", delta_max), ("p_max", p_max)) if v is not None]
+    given = (("a_max", a_max), ("delta_max", delta_max), ("p_max", p_max))
+    ends = [(k, v) for k, v in given if v is not None]
     if len(ends) != 1:
         raise InputError("a_max", a_max, "exactly one of a_max, delta_max, p_max")
     if delta_max is not None and control != "displacement":

@@ -146,7 +146,7 @@ def _extremum(stage, states, key, sign):
     vals = [sign * key(s) for s in states]
     i = int(np.argmin(vals))
     if i == 0 or i == len(states) - 1:
-        return states[i], i
+        return states[i]
     lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
     cache = {}
 
@@ -156,7 +156,7 @@ def _extremum(stage, states, key, sign):
         return sign * key(st)
 
     res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-8 * hi})
-    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i])), None
+    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i]))
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
@@ -193,8 +193,8 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     dl, stage = _delamination(cfg, c, m, on)
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
-    turn, _ = _extremum(stage, [on] + dl, key, sign)
-    fmin, _ = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
+    turn = _extremum(stage, [on] + dl, key, sign)
+    fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
     extra = [s for s in (turn, fmin) if s is not on and all(s is not t for t in dl)]
     dl = sorted(dl + extra, key=lambda s: -s.rho_a)
     return _assemble(c, mc, pin, dl, m, on, turn, fmin)

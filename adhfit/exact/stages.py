@@ -44,7 +44,7 @@ class Stage:
         if not st.theta_end < 0.5 * math.pi:
             raise ConvergenceError("exact membrane: the free membrane turns past vertical at the clamp "
                                    "(Case II, outside the model: Case I only)",
-                                   {**fixed, **targets, self.param: float(value), "lambda0": self.cfg.lambda0})
+                                   {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
         return st
 
     def x(self, st: State) -> list:
