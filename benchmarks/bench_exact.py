@@ -97,7 +97,7 @@ def main() -> None:
              f"Command: `{meta['command']}` at {commit}; python {meta['python']}, nproc {meta['nproc']}, "
              f"load average at start {load0[0]:.2f}, at end {meta['load_end'][0]:.2f}.", "",
              "Base case p = 0.6 (displacement) or d = 0.2 (pressure), w = 0.2, rs = 0.5, a_max = 0.25. "
-             "n = fixed 8th-order Runge-Kutta steps per membrane segment (default 32). Error: max abs "
+             "n = fixed 8th-order Runge-Kutta steps per membrane segment (default 24). Error: max abs "
              "over the A2 summary values against n = 128; the last column checks the end-of-loading "
              "state (a, d, f) of the n = 128 run against the independent adaptive reference. "
              "The wall times are inflated by the shared machine's load; the least CPU time "

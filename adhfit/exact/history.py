@@ -151,12 +151,12 @@ def _extremum(stage, states, key, sign):
     cache = {}
 
     def fun(r):
-        st = stage.solve(r, stage.x(states[i]))
+        st = stage.solve(r, stage.x(states[i]), tol=1e-14)  # a smooth objective: the extremum is flat
         cache[r] = st
         return sign * key(st)
 
-    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-8 * hi})
-    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i]))
+    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-11 * hi})
+    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i]), tol=1e-14)
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,

@@ -31,8 +31,9 @@ class Stage:
     param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
     memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
 
-    def solve(self, value: float, x0) -> State:
-        """The state at parameter ``value``, Newton from the guess ``x0`` (ordered as unknowns)."""
+    def solve(self, value: float, x0, tol: float = 1e-11) -> State:
+        """The state at parameter ``value``, Newton from the guess ``x0`` (ordered as unknowns) to
+        residuals below ``tol``."""
         fixed, targets = dict(self.fixed), dict(self.targets)
         value = float(value)
         if self.param in targets:
@@ -40,7 +41,7 @@ class Stage:
         else:
             fixed[self.param] = value
         st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets,
-                         memo=self.memo)
+                         memo=self.memo, tol=tol)
         if not st.theta_end < 0.5 * math.pi:
             raise ConvergenceError("exact membrane: the free membrane turns past vertical at the clamp "
                                    "(Case II, outside the model: Case I only)",
