@@ -147,3 +147,12 @@ def test_input_errors_name_the_parameter(kw, name):
     with pytest.raises(InputError) as exc:
         exact_history("displacement", "frictionless", w=0.2, rs=0.5, points=20, **kw)
     assert exc.value.name == name
+
+
+def test_weak_adhesion_no_slip_branch_ends_where_large_stretch_does():
+    """No slip, w = 0.002: quasi-static delamination ends at a finite radius where alpha = 0."""
+    kw = dict(p=0.6, w=0.002, rs=0.5, a_max=0.25)
+    ls = simulate("displacement", "no-slip", **kw)
+    ex = exact_history("displacement", "no-slip", lambda0=10.0, points=40, **kw)
+    assert ex.columns["alpha"][-1] == pytest.approx(0.0, abs=1e-12)
+    assert ex.inputs["delamination_ends_at_a"] == pytest.approx(ls.inputs["delamination_ends_at_a"], abs=1e-5)

@@ -9,7 +9,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from ..errors import ConvergenceError, InputError
 from .control import Control, prepare
-from .stages import Stage, delamination, making_contact, onset, pinning
+from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
 __all__ = ["ExactHistory", "exact_history", "COLUMNS"]
@@ -54,18 +54,26 @@ def _predict(v, vs, xs, x0):
     return list(out)
 
 
-def march(stage: Stage, values, x0, depth: int = 0) -> list:
-    """Solve ``stage`` at each value in turn, continuing from the previous state (secant
-    predictor); a failed step is split in two (up to 8 times)."""
+def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) -> list:
+    """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
+    predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
+    (a fold the parameter cannot pass) returns the states solved up to there instead of raising."""
     out, xs, vs = [], [], []
     for v in values:
         guess = _predict(v, vs, xs, x0)
         try:
             st = stage.solve(v, guess)
         except ConvergenceError:
-            if depth >= 8 or not vs:
+            if depth >= 12 or not vs:
+                if stop_ok:
+                    return out
                 raise
-            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1)
+            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok)
+            if len(mid) < 2:
+                out.extend(mid)
+                if stop_ok:
+                    return out
+                raise
             st = mid[-1]
         out.append(st)
         xs.append(stage.x(st))
@@ -137,7 +145,15 @@ def _delamination(cfg, c, m, on):
     g = (1.0 - _cluster(c.n_del)[1:]) ** 1.5
     g[-1] = min(g[-2] * 0.5, 1e-3)
     rho = on.rho_a * g
-    states = march(stage, rho, stage.x(on))
+    states = march(stage, rho, stage.x(on), stop_ok=True)
+    if not states:
+        raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
+                               {"w": c.w, "lambda0": c.lambda0})
+    if len(states) < len(rho) and c.slip == "no-slip" and states[-1].alpha < 0.2:
+        end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
+        last = states[-1]
+        x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
+        states.append(end.solve(0.0, x))
     return states, stage
 
 
@@ -197,7 +213,11 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
     extra = [s for s in (turn, fmin) if s is not on and all(s is not t for t in dl)]
     dl = sorted(dl + extra, key=lambda s: -s.rho_a)
-    return _assemble(c, mc, pin, dl, m, on, turn, fmin)
+    out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
+    if dl[-1].a > 2e-3 * c.a_max:
+        # the quasi-static branch ends at a finite contact radius (detachment from there is dynamic)
+        out.inputs["delamination_ends_at_a"] = dl[-1].a
+    return out
 
 
 def _row(st, c):

@@ -15,7 +15,7 @@ from ..errors import ConvergenceError
 from .solve import solve_state
 from .state import Config, State
 
-__all__ = ["Stage", "making_contact", "pinning", "delamination", "onset"]
+__all__ = ["Stage", "making_contact", "pinning", "delamination", "onset", "branch_end"]
 
 
 @dataclass(frozen=True)
@@ -92,3 +92,11 @@ def delamination(cfg: Config, control: str, slip: str, m: State, w: float, p=Non
     if slip == "frictionless":
         return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
     return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
+
+
+def branch_end(cfg: Config, control: str, m: State, w: float, p=None, d=None) -> Stage:
+    """No slip, weak adhesion: where the quasi-static delamination branch ends (alpha = 0, the
+    stretch mismatch alone releases w); unknowns lambda1+ and rho_a, parameter alpha (= 0)."""
+    fx, u, r, t = _control(control, p, d)
+    return Stage(cfg, "given", {**fx, "lc": m.lc, "alpha": 0.0}, ("l1p", "rho_a") + u,
+                 ("clamp", "G") + r, {**t, "w": w}, "alpha")
