@@ -156,3 +156,18 @@ def test_weak_adhesion_no_slip_branch_ends_where_large_stretch_does():
     ex = exact_history("displacement", "no-slip", lambda0=10.0, points=40, **kw)
     assert ex.columns["alpha"][-1] == pytest.approx(0.0, abs=1e-12)
     assert ex.inputs["delamination_ends_at_a"] == pytest.approx(ls.inputs["delamination_ends_at_a"], abs=1e-5)
+
+
+@pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
+def test_pressure_control_states_against_reference(slip):
+    """Pressure control, lambda0 = 1.5: states re-shot by the independent solver at their own p."""
+    h = exact_history("pressure", slip, d=0.2, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5, points=30)
+    m = [s for s, st in zip(h.states, h.columns["stage"]) if st == "making_contact"][-1]
+    for i in (len(h.states) // 2, -5):
+        s = h.states[i]
+        edge = "frictionless" if slip == "frictionless" else "given"
+        lc = s.lc if slip == "frictionless" else m.lc
+        r_end, d, f, G = ref.edge_state(s.p, 1.5, 0.5, lc, s.rho_a, s.alpha, edge, s.l1p)
+        assert r_end == pytest.approx(1.0, abs=1e-8)
+        assert d == pytest.approx(0.2, abs=1e-8)
+        assert (f, G) == pytest.approx((s.f, 0.2), abs=1e-8)

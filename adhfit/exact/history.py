@@ -221,7 +221,8 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
 
 
 def _row(st, c):
-    return {"f": st.f, "delta": c.delta(st), "p": st.p, "a": st.a}
+    delta = c.delta(st)
+    return {"f": st.f, "delta": None if math.isnan(delta) else delta, "p": st.p, "a": st.a}
 
 
 def _assemble(c, mc, pin, dl, m, on, turn, fmin):
