@@ -114,23 +114,33 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
 
 
 def _onset(cfg, c, m):
+    """Bracket G = w along pinning (steps in alpha, halved where a step fails), then solve it."""
     pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
-    x = pin.x(m)
-    alpha, prev, prev_a = 0.0, m, 0.0
+    top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
+    prev, prev_a, step = m, 0.0, 0.04
     while True:
-        alpha += 0.04
-        if alpha > (0.5 * math.pi if c.slip == "frictionless" else math.pi):
-            raise ConvergenceError("exact pinning: G never reaches w", {"w": c.w})
-        st = march(pin, [alpha], x)[-1]
+        alpha = prev_a + step
+        if alpha >= top or step < 1e-9:
+            raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
+                                   "(e.g. the clamp turning past vertical)", {"w": c.w, "alpha": prev_a})
+        try:
+            st = pin.solve(alpha, pin.x(prev))
+        except ConvergenceError:
+            step *= 0.5
+            continue
         if st.G >= c.w:
             break
-        prev, prev_a, x = st, alpha, pin.x(st)
+        prev, prev_a = st, alpha
+    on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     t = (c.w - prev.G) / (st.G - prev.G)
     guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
-    on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
-    k = len(pin.unknowns)
-    guess = guess[:1] + [prev_a + t * (alpha - prev_a)] + guess[1:k]
-    return on_stage.solve(c.w, guess), pin
+    guess = guess[:1] + [prev_a + t * (alpha - prev_a)] + guess[1:]
+    try:
+        return on_stage.solve(c.w, guess), pin
+    except ConvergenceError:
+        a_on = brentq(lambda a: pin.solve(a, pin.x(prev)).G - c.w, prev_a, alpha, xtol=1e-14)
+        st = pin.solve(a_on, pin.x(prev))
+        return on_stage.solve(c.w, pin.x(st)[:1] + [a_on] + pin.x(st)[1:]), pin
 
 
 def _pinning(cfg, c, m):
