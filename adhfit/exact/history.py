@@ -87,13 +87,16 @@ def _loading_end(stage: Stage, c: Control) -> float:
     value = (lambda s: c.free.d - s.d) if name == "delta_max" else (lambda s: s.p)
     cap = 0.95 * min(1.0, c.rs)
     a_prev, st_prev = 0.0, c.free
-    x = [c.free.lc, 0.01 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
-    for a in np.linspace(0.02 * cap, cap, 50):
+    x = [c.free.lc, 1e-3 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
+    for a in np.geomspace(1e-3 * cap, cap, 60):
         try:
             st = march(stage, [a], x)[-1]
         except ConvergenceError:
             break
         if value(st) >= target:
+            if a_prev == 0.0:
+                raise InputError(name, target, "a value reached by a contact radius above 1e-3 a_max")
+
             def resid(aa):
                 return value(stage.solve(aa, stage.x(st))) - target
             return brentq(resid, a_prev, a, xtol=1e-14, rtol=1e-14)
@@ -122,7 +125,9 @@ def _onset(cfg, c, m):
         alpha = prev_a + step
         if alpha >= top or step < 1e-9:
             raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
-                                   "(e.g. the clamp turning past vertical)", {"w": c.w, "alpha": prev_a})
+                                   "(the clamp turning past vertical, or the contact region going slack: "
+                                   "stretch -> 1, outside a membrane model)",
+                                   {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
         try:
             st = pin.solve(alpha, pin.x(prev))
         except ConvergenceError:
@@ -138,7 +143,10 @@ def _onset(cfg, c, m):
     try:
         return on_stage.solve(c.w, guess), pin
     except ConvergenceError:
-        a_on = brentq(lambda a: pin.solve(a, pin.x(prev)).G - c.w, prev_a, alpha, xtol=1e-14)
+        try:
+            a_on = brentq(lambda a: pin.solve(a, pin.x(prev)).G - c.w, prev_a, alpha, xtol=1e-14)
+        except ValueError as exc:
+            raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": alpha}) from exc
         st = pin.solve(a_on, pin.x(prev))
         return on_stage.solve(c.w, pin.x(st)[:1] + [a_on] + pin.x(st)[1:]), pin
 

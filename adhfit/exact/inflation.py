@@ -78,7 +78,9 @@ def _newton(resid, x):
 
 def _bracketed(resid, lambda0, p):
     lo, hi = lambda0, lambda0 * 1.05
-    while resid(hi) < 0.0:
+    if not resid(lo) < 0.0:
+        raise ConvergenceError("exact free inflation: no Case I state", {"p": p, "lambda0": lambda0})
+    while not resid(hi) >= 0.0:
         lo, hi = hi, hi * 1.2
         if hi > 1e3 * lambda0:
             raise ConvergenceError("exact free inflation", {"p": p, "lambda0": lambda0})
