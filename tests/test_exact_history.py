@@ -171,3 +171,14 @@ def test_pressure_control_states_against_reference(slip):
         assert r_end == pytest.approx(1.0, abs=1e-8)
         assert d == pytest.approx(0.2, abs=1e-8)
         assert (f, G) == pytest.approx((s.f, 0.2), abs=1e-8)
+
+
+def test_strong_adhesion_and_domain_limits():
+    # strong adhesion, no slip: G rises steeply near the end of pinning, the onset is still found
+    h = exact_history("displacement", "no-slip", p=0.6, w=10.0, rs=0.5, a_max=0.25, lambda0=10.0, points=20)
+    assert h.summary["f_min"]["f"] == pytest.approx(
+        simulate("displacement", "no-slip", p=0.6, w=10.0, rs=0.5, a_max=0.25).summary["f_min"]["f"], abs=1e-6)
+    # at lambda0 = 1.2 the contact region goes slack (stretch -> 1) before G reaches w = 5: an error
+    from adhfit.errors import ConvergenceError
+    with pytest.raises(ConvergenceError, match="slack"):
+        exact_history("pressure", "frictionless", d=0.2, w=5.0, rs=0.5, a_max=0.25, lambda0=1.2, points=20)
