@@ -31,7 +31,7 @@ class Stage:
     param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
     memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
 
-    def solve(self, value: float, x0, tol: float = 1e-11) -> State:
+    def solve(self, value: float, x0, tol: float = 1e-10) -> State:
         """The state at parameter ``value``, Newton from the guess ``x0`` (ordered as unknowns) to
         residuals below ``tol``."""
         fixed, targets = dict(self.fixed), dict(self.targets)
