@@ -16,12 +16,7 @@ import math
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dc
-
-_NS = 12
-A = np.ascontiguousarray(_dc.A[:_NS, :_NS], dtype=np.float64)
-B = np.ascontiguousarray(_dc.B[:_NS], dtype=np.float64)
-C = np.ascontiguousarray(_dc.C[:_NS], dtype=np.float64)
+from .dop853 import A, B, C
 
 FREE = 0
 CONTACT = 1
