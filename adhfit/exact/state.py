@@ -69,10 +69,12 @@ def _contact(cfg: Config, lc: float, rho_a: float):
     """The contact field's end state, remembered for the last (lc, rho_a): Newton steps and
     difference quotients in alpha or lambda1+ (no slip) do not change it."""
     key = (lc, rho_a, cfg.crv, cfg.n)
-    if _LAST.get("key") != key:
-        _LAST["key"] = key
-        _LAST["yc"] = K.from_apex(K.CONTACT, lc, rho_a, cfg.n, cfg.crv, K.A, K.B, K.C)
-    return _LAST["yc"]
+    last = _LAST.get("v")  # one (key, value) tuple: read and written atomically (threads)
+    if last is not None and last[0] == key:
+        return last[1]
+    yc = K.from_apex(K.CONTACT, lc, rho_a, cfg.n, cfg.crv, K.A, K.B, K.C)
+    _LAST["v"] = (key, yc)
+    return yc
 
 
 _EDGES = {"continuous": K.CONTINUOUS, "frictionless": K.FRICTIONLESS, "given": K.GIVEN}
