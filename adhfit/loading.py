@@ -16,11 +16,6 @@ from functools import lru_cache
 
 import numpy as np
 
-from .core import history as engine
-from .core.branches import DEL_FR, DEL_NS, MC, PIN_FR, PIN_NS, evaluate_batch
-from .core.continuation import F_OK, F_STEPS, SCALE_LINEAR, SCALE_LOG, follow, max_steps
-from .core.newton import OK, mc_bracketed
-from .core.solve import solve_one
 from .core.inflation import apex_deflection, critical_pressure
 from .errors import ConvergenceError, InputError
 from .params import A_MAX_OVER_RS, DIMENSIONLESS, check_scene
@@ -53,6 +48,23 @@ class History:
     columns: dict
     summary: dict
     inputs: dict = field(default_factory=dict)
+
+
+
+
+class _Kernels:
+    """The compiled kernels, imported on first use: ``import adhfit`` does not import numba."""
+
+    def __getattr__(self, name):
+        from .core import branches, continuation, history, newton, solve  # noqa: PLC0415
+        for mod in (history, branches, continuation, newton, solve):
+            if hasattr(mod, name):
+                setattr(self, name, getattr(mod, name))
+                return getattr(mod, name)
+        raise AttributeError(name)
+
+
+K = _Kernels()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -175,12 +187,12 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     d_fix = float(v["d"]) if pc else 0.0
     kappa_dc = 0.0 if pc else float(v["p"])
     p_cr = float(critical_pressure(d_fix)) if pc else 0.0
-    (status, err, a_m, out, counts, tp_pos, summ, f_max, branch_end) = engine.run(
+    (status, err, a_m, out, counts, tp_pos, summ, f_max, branch_end) = K.run(
         pc, slip == "no-slip", kappa_dc, d_fix, p_cr, c, float(v["w"]), *end, *_grids(v["points"]),
         A_END)
     v["a_max"] = float(a_m)
     info = {"control": control, "slip": slip, **v}
-    if status != engine.H_OK:
+    if status != K.H_OK:
         _raise(status, err, v, info, c, pc)
     cols = dict(zip(("a", "alpha", "p", "d", "f", "G", "delta"), out))
     cols["stage"] = np.repeat(_STAGE_LABELS, counts)
@@ -201,30 +213,30 @@ _DOMAIN = "state outside the model's domain (free membrane past vertical at the 
 def _raise(status, err, v, info, c, pc):
     """Word the failure the kernel reports (status and failing state ``err``, see core.history)."""
     slip = info["slip"]
-    if status == engine.H_END_UNREACHABLE:
+    if status == K.H_END_UNREACHABLE:
         name = "p_max" if pc else "delta_max"
         cap = _a_cap(c)
         if not pc and math.isfinite(err[0]):
             reach = v["delta_max"] - float(err[0])  # d0 - d(cap): the displacement at the cap
             raise InputError(name, v[name], f"a number in (0, {reach:.6g}] (the displacement at a_max = {cap:g})")
         raise InputError(name, v[name], f"reachable with a contact radius below {cap:g}")
-    if status == engine.H_END_SOLVE:
+    if status == K.H_END_SOLVE:
         name = "p_max" if pc else "delta_max"
         raise ConvergenceError(f"contact radius for {name}", {name: v[name], "status": int(err[0])})
-    if status == engine.H_MC_PRESSURE:
+    if status == K.H_MC_PRESSURE:
         raise InputError("a_max", v["a_max"], "reachable under pressure control at this gap",
                          "The membrane cannot reach this contact radius with a Case I shape "
                          "(its tangent would turn past vertical at the clamp).")
-    if status == engine.H_MC_STATE:
+    if status == K.H_MC_STATE:
         what = "end of loading" if err[0] == _grids(v["points"])[0].size - 1 else "making contact"
         raise ConvergenceError(f"{what}: {_DOMAIN}", {**info, "index": int(err[0]), "a": float(err[1])})
     stage = _STAGE_OF.get(int(err[0]), "?")
-    if status == engine.H_FOLLOW:
+    if status == K.H_FOLLOW:
         why = ("too many continuation steps" if int(err[1]) == 2 else
                "continuation stalled (the state leaves the model's domain)")
         raise ConvergenceError(f"{stage} ({slip}): {why}",
                                {"locator": float(err[2]), "kappa": float(err[3]), **info})
-    if status == engine.H_STATE:
+    if status == K.H_STATE:
         raise ConvergenceError(f"{stage}: {_DOMAIN}", {**info, "index": int(err[1]), "locator": float(err[2])})
     which = "turning point" if int(err[1]) == 0 else "f min"
     raise ConvergenceError(f"{which} ({stage}, {slip}): the extremum search failed",
@@ -297,7 +309,7 @@ class _States:
 
     def _observe(self, code, x, k, loc):
         """a, alpha, p, d, f, G, J0, ok of one state."""
-        out, ok = evaluate_batch(code, np.array([x]), np.array([k]), np.array([loc]), self.c,
+        out, ok = K.evaluate_batch(code, np.array([x]), np.array([k]), np.array([loc]), self.c,
                                    self.w, self.a_m)
         return np.append(out[:, 0], ok[0])
 
@@ -305,15 +317,15 @@ class _States:
         if not self.pc:
             return self.kappa
         hi = (1.0 + self.c * a * a) / (1.0 - a * a) * (1 - 1e-12)
-        k, st = mc_bracketed(a, self.c, self.d_fix, float(critical_pressure(self.d_fix)), hi)
-        if st != OK:
+        k, st = K.mc_bracketed(a, self.c, self.d_fix, float(critical_pressure(self.d_fix)), hi)
+        if st != K.OK:
             raise InputError("a_max", self.a_m, "reachable under pressure control at this gap",
                              "The membrane cannot reach this contact radius with a Case I shape "
                              "(its tangent would turn past vertical at the clamp).")
         return k
 
     def making_contact(self, a):
-        return self._observe(MC, 0.0, self._mc_kappa(a), a)
+        return self._observe(K.MC, 0.0, self._mc_kappa(a), a)
 
     def _loaded(self):
         """(L_m, kappa_m) at the end of loading, and the pinning path (locators, x, kappa) to the onset."""
@@ -321,29 +333,29 @@ class _States:
         if not end[7]:
             raise ConvergenceError(f"end of loading: {_DOMAIN}", {"a_max": self.a_m})
         self.L_m, k_m = float(end[6]), float(end[2])
-        code = PIN_NS if self.no_slip else PIN_FR
+        code = K.PIN_NS if self.no_slip else K.PIN_FR
         self.end = self.w if self.no_slip else math.atan(math.sqrt(2.0 * self.w))
-        res = self._follow(code, 0.0, self.end, 1.0 if self.no_slip else self.a_m, k_m, SCALE_LINEAR)
+        res = self._follow(code, 0.0, self.end, 1.0 if self.no_slip else self.a_m, k_m, K.SCALE_LINEAR)
         self.path = res[4], res[5], res[6]
         self.onset = res[7]
 
     def _follow(self, code, l0, target, x0, k0, scale):
-        res = follow(code, self.pc, l0, np.array([target]), x0, k0, self.c, self.w, self.a_m,
-                       self.L_m, self.d_fix, scale, max_steps(1), False)
-        if res[0] != F_OK:
-            what = "too many continuation steps" if res[0] == F_STEPS else "continuation stalled"
+        res = K.follow(code, self.pc, l0, np.array([target]), x0, k0, self.c, self.w, self.a_m,
+                       self.L_m, self.d_fix, scale, K.max_steps(1), False)
+        if res[0] != K.F_OK:
+            what = "too many continuation steps" if res[0] == K.F_STEPS else "continuation stalled"
             raise ConvergenceError(f"{'pinning' if l0 == 0.0 else 'delamination'}: {what}",
                                    {"locator": float(res[4][-1]), "kappa": float(res[6][-1]), **self.v})
         return res
 
     def _pinned(self, loc):
         """The pinned state at locator ``loc`` (G or alpha) from predictors on the path."""
-        code = PIN_NS if self.no_slip else PIN_FR
+        code = K.PIN_NS if self.no_slip else K.PIN_FR
         pl, px, pk = self.path
         kg = float(np.interp(loc, pl, pk)) if self.pc else self.kappa
-        x, k, st = solve_one(code, self.pc, loc, kg, float(np.interp(loc, pl, px)), self.c,
+        x, k, st = K.solve_one(code, self.pc, loc, kg, float(np.interp(loc, pl, px)), self.c,
                                self.w, self.a_m, self.L_m, self.d_fix)
-        if st != OK:
+        if st != K.OK:
             raise ConvergenceError("pinning: the state does not solve", {"locator": loc, **self.v})
         return self._observe(code, x, k, loc)
 
@@ -367,9 +379,9 @@ class _States:
         a_on, k_on = float(self.onset[0]), float(self.onset[2])
         if not 0.0 < a <= a_on * (1 + 1e-12):
             raise InputError("a", a, f"in (0, {a_on:.10g}] (delamination runs from the onset inward)")
-        code = DEL_NS if self.no_slip else DEL_FR
+        code = K.DEL_NS if self.no_slip else K.DEL_FR
         x_on = float(self.path[1][-1]) if self.no_slip else math.nan
         if a >= a_on:
             return self._observe(code, x_on, k_on, a_on)
-        res = self._follow(code, a_on, a, x_on, k_on, SCALE_LOG)
+        res = self._follow(code, a_on, a, x_on, k_on, K.SCALE_LOG)
         return self._observe(code, float(res[2][0]), float(res[3][0]), a)
