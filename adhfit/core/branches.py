@@ -43,7 +43,7 @@ def _frictionless_constants(kappa, a, c, alpha):
 
 @jit
 def unpack(code, x, kappa, loc, c, w, a_m):
-    """(a, alpha, D, C2, G) of one state on branch ``code`` (the branches._mc ... _del_fr)."""
+    """(a, alpha, D, C2, G) of one state on branch ``code`` (its stage's eqs.: making contact, 39/52, 55/56, 57, 61)."""
     # all three share one dtype (the batch functions see to it), so every branch returns one type
     zero = 0.0 * loc
     if code == MC:
@@ -70,7 +70,7 @@ def unpack(code, x, kappa, loc, c, w, a_m):
 
 @jit
 def state(code, x, kappa, loc, c, w, a_m, need_j1):
-    """branches.evaluate for one state: (a, alpha, d, f, G, J0, ok); p is kappa."""
+    """Observables of one state: (a, alpha, d, f, G, J0, ok); p is kappa."""
     a, alpha, D, C2, G = unpack(code, x, kappa, loc, c, w, a_m)
     s, ac = substrate_cos(a, c), a * c
     cos_ta = s * np.cos(alpha) + ac * np.sin(alpha)
@@ -89,7 +89,7 @@ def material_target(code, loc, c, a_m, L_m):
 
 @jit
 def material_residual(code, x, kappa, loc, c, w, a_m, L_m):
-    """Material condition J0 - target (branches._residual); J1 is not needed."""
+    """Material condition J0 - target (NaN outside the model); J1 is not needed."""
     st = state(code, x, kappa, loc, c, w, a_m, False)
     if not st[6]:  # outside the model: NaN even under complex evaluation, where sqrt stays finite
         return complex(math.nan, math.nan)
@@ -98,7 +98,7 @@ def material_residual(code, x, kappa, loc, c, w, a_m, L_m):
 
 @jit
 def bracket(code, loc, c, w, a_m):
-    """(lo, hi) of the unknown (pinning.noslip_stretch_bracket, branches._a_limit, ...)."""
+    """(lo, hi) of the unknown (no slip: t where eq. 62 has a real angle; frictionless: a inside the substrate)."""
     if code == PIN_FR:
         lim = min(1.0, 1.0 / c) if c > 0 else 1.0
         return 1e-9 * a_m, (1.0 - 1e-9) * lim
@@ -114,7 +114,7 @@ def is_implicit(code):
 
 @jit
 def evaluate_batch(code, x, kappa, loc, c, w, a_m):
-    """branches.evaluate row by row; x, kappa, loc share one dtype (float64 or complex128).
+    """Observables row by row; x, kappa, loc share one dtype (float64 or complex128).
 
     Returns
     -------
@@ -154,7 +154,7 @@ def observe(code, x, k, loc, c, w, a_m, out):
 
 @jit
 def admissible(ok, out):
-    """ok and a, alpha, p, d, f, G finite (continuation.extremum's test)."""
+    """ok and a, alpha, p, d, f, G finite (an accepted state)."""
     if not ok:
         return False
     for j in range(6):

@@ -51,7 +51,7 @@ def _from_step(scale, s):
 
 @jit
 def _predict(ss, xs, ks, m, s):
-    """continuation._predict: x, kappa at s extrapolated from the last accepted states (quadratic
+    """x, kappa at s extrapolated from the last accepted states (quadratic
     through three, linear through two, else the last one)."""
     if m > 2 and ss[m - 3] != ss[m - 2] and ss[m - 2] != ss[m - 1] and ss[m - 3] != ss[m - 1]:
         s0, s1, s2 = ss[m - 3], ss[m - 2], ss[m - 1]
@@ -69,7 +69,7 @@ def _predict(ss, xs, ks, m, s):
 @jit
 def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, max_steps,
                   allow_end):
-    """continuation.follow in one call.
+    """Follow a branch from locator ``l0`` (solved: x0, k0) through ``targets`` (in order).
 
     ``scale`` is the step variable: ``SCALE_LINEAR`` (the locator), ``SCALE_LOG`` (``log=True``) or
     ``SCALE_SQRT`` (``sqrt=True``).

@@ -25,7 +25,7 @@ BRENT_MAXITER = 200
 
 @jit
 def _solve_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix):
-    """continuation.extremum's solve: predictors interpolated from the rows."""
+    """The state at ``loc`` from predictors interpolated on the rows (rl, rx, rk)."""
     kg = np.interp(loc, rl, rk) if pressure else kappa
     xg = np.interp(loc, rl, rx)
     return solve_one(code, pressure, loc, kg, xg, c, w, a_m, L_m, d_fix)
@@ -33,7 +33,7 @@ def _solve_at(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix):
 
 @jit
 def _slope_of(code, pressure, loc, x, k, c, w, a_m, L_m, key):
-    """d(observable ``key``)/d(locator) at a solved state (compiled.derivative_batch, one row)."""
+    """d(observable ``key``)/d(locator) at a solved state (:func:`.solve.derivative_row`)."""
     xc, kc = derivative_row(code, pressure, loc, x, k, c, w, a_m, L_m)
     if key == 2:
         return kc.imag / STEP
@@ -129,7 +129,7 @@ def _probe(code, pressure, loc, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, s
 @jit
 def extremum(code, pressure, lo, hi, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
                     xtol, rtol, maxiter):
-    """continuation.extremum in one call.
+    """The state in [lo, hi] where ``sign * obs[key]`` is largest: a root of the slope, or an end.
 
     Returns
     -------

@@ -181,7 +181,7 @@ def run(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, end_kappa, end_ta
         End of loading; NaN to solve it: the radius where the making-contact gap at pressure
         ``end_kappa`` reaches ``end_target``, in [end_lo, end_hi].
     u_mc, u_pin, u_dl : ndarray
-        Row grids of the three stages (``loading._grids``).
+        Row grids of the three stages (``adhfit.loading._grids``).
     a_end_rel : float
         Where the history stops on the way to detachment, over a_max.
 

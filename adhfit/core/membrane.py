@@ -19,7 +19,7 @@ __all__ = ["roots", "integrals", "substrate_cos", "free_membrane", "rise", "rise
 
 @jit
 def roots(kappa, D, C2):
-    """q and u_minus of Q(u) = (q - kappa^2 u)(u - u_minus) (integrals.quadratic_roots)."""
+    """q and u_minus of Q(u) = (q - kappa^2 u)(u - u_minus) (stable formulas, DESIGN.md B2)."""
     B = 1.0 - 2.0 * kappa * D
     C = C2 - D * D
     sq = np.sqrt(1.0 - 4.0 * kappa * D + 4.0 * kappa * kappa * C2)
@@ -32,7 +32,7 @@ def roots(kappa, D, C2):
 
 @jit
 def _pair(C, x1, x2, x3, y1, y2, y3, span, need_j1):
-    """J0 and the u-moment from the factor values at the two limits (integrals._carlson_pair)."""
+    """J0 and the u-moment from the factor values at the two limits (DLMF 19.29.4, 19.29.7 with u = r^2)."""
     X1, X2, X3 = np.sqrt(x1), np.sqrt(x2), np.sqrt(x3)
     Y1, Y2, Y3 = np.sqrt(y1), np.sqrt(y2), np.sqrt(y3)
     U12 = (X1 * X2 * Y3 + Y1 * Y2 * X3) / span
@@ -47,7 +47,7 @@ def _pair(C, x1, x2, x3, y1, y2, y3, span, need_j1):
 
 @jit
 def integrals(kappa, D, C2, a, q_edge, through, need_j1):
-    """J0, J1 from the edge to the clamp (integrals.free_membrane_integrals), one state."""
+    """J0, J1 from the edge to the clamp (eqs. 35-58), one state; ``through``: theta_a > pi/2 (eqs. 42, 47)."""
     q, um = roots(kappa, D, C2)
     k2 = kappa * kappa
     C = C2 - D * D
@@ -76,7 +76,7 @@ def substrate_cos(a, c):
 
 @jit
 def free_membrane(kappa, D, C2, a, c, cos_ta, need_j1):
-    """J0, d and admissibility of one state (membrane.free_membrane, integrals.admissible)."""
+    """J0, d and admissibility of one state (Q >= 0 on the free membrane, Case I at the clamp)."""
     q_edge = (a * a + C2) * cos_ta * cos_ta
     through = cos_ta.real < 0.0
     j0, j1, q, um = integrals(kappa, D, C2, a, q_edge, through, need_j1)

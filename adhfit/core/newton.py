@@ -48,7 +48,7 @@ def _resid(kind, code, z, kappa, loc, c, w, a_m, L_m, d_fix):
 
 @jit
 def bracketed(kind, code, kappa, loc, c, w, a_m, L_m, d_fix, x0, lo, hi):
-    """solve.newton with a bracket for one row: (x, status, r_lo, r_hi).
+    """Newton with a bracket for one row: (x, status, r_lo, r_hi).
 
     Same rules: complex-step derivative, the bracket's residuals must differ in sign (checked), a
     Newton step that leaves the bracket (or a NaN step) is replaced by bisection, an exact zero
@@ -99,7 +99,7 @@ def _newton_bracketed(code, kappa, loc, c, w, a_m, L_m, x0, lo, hi):
 
 @jit
 def damped_step(x, last_good, r, dr):
-    """One step of solve.newton without a bracket: (next x, last good x, converged).
+    """One step of Newton without a bracket: (next x, last good x, converged).
 
     A Newton step from a finite residual and derivative; otherwise halfway back toward the last
     good iterate. Converged on an exact zero or a step below XTOL (1 + |x|).
@@ -112,7 +112,7 @@ def damped_step(x, last_good, r, dr):
 
 @jit
 def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
-    """solve.newton without a bracket for one row: (x, status); NaN when it does not converge.
+    """Newton without a bracket for one row: (x, status); NaN when it does not converge.
 
     A step that lands on NaN is halved back toward the last good iterate.
     """
@@ -128,7 +128,7 @@ def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
 
 @jit
 def inner_one(code, kappa, loc, c, w, a_m, L_m, x0, has_x0):
-    """branches.solve_unknown for one row: (x, status).
+    """The unknown of one row at fixed kappa: (x, status).
 
     From a finite start value the row is first solved by unbracketed Newton (the root near a
     continuation predictor); if that fails or leaves the bracket, the row is solved again, bracketed,
@@ -196,7 +196,7 @@ def mc_gap(kc, a, c, d_fix):
 
 @jit
 def mc_bracketed(a, c, d_fix, l, h):
-    """branches.mc_pressure for one row, by :func:`bracketed` from the middle of [l, h].
+    """Making contact, the pressure for the gap d_fix at radius a, by :func:`bracketed` from the middle of [l, h].
 
     Returns (kappa, status): ``OK``, ``FAIL_BRACKET`` or ``FAIL_INNER``.
     """

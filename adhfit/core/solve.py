@@ -26,7 +26,7 @@ FD_STEP = 1.4901161193847656e-08
 
 @jit
 def propagate(code, x, kappa, kc, lc, c, w, a_m, L_m):
-    """branches._propagate: one complex Newton step from the real root carries dx/d(kappa, loc)."""
+    """One complex Newton step from the real root carries dx/d(kappa, loc)."""
     r_x = material_residual(code, complex(x, STEP), complex(kappa, 0.0), complex(lc.real, 0.0),
                     c, w, a_m, L_m).imag / STEP
     return x - material_residual(code, complex(x, 0.0), kc, lc, c, w, a_m, L_m) / r_x
@@ -56,7 +56,7 @@ def _jacobian(code, x, kappa, loc, c, w, a_m, s0, fd):
 
 @jit
 def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
-    """branches._joint_newton for one row: (x, kappa, converged).
+    """Joint Newton on (material condition, gap) for one row: (x, kappa, converged).
 
     Newton on the pair (material condition, gap) in (x, kappa) from a predictor. The first
     iteration takes the 2x2 Jacobian (:func:`_jacobian`, by differences if ``fd``); later ones reuse it (chord steps, one real
@@ -96,7 +96,7 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
 
 @jit
 def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
-    """branches.solve_state under pressure control for one row: (x, kappa, status).
+    """Pressure control, one row: (x, kappa, status).
 
     An implicit row with a finite predictor x0 is first solved by :func:`_joint_one` (Jacobian by
     differences, then exact), an explicit
@@ -159,7 +159,7 @@ def solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix):
 
 @jit
 def _inner_rows(code, kappa, loc, c, w, a_m, L_m, x0, has_x0, xs, status):
-    """branches.solve_unknown over all rows, into ``xs`` and ``status`` (NaN and a code on failure).
+    """The unknown over all rows, into ``xs`` and ``status`` (NaN and a code on failure).
 
     Rows are independent (:func:`inner_one` each).
     """
@@ -169,7 +169,7 @@ def _inner_rows(code, kappa, loc, c, w, a_m, L_m, x0, has_x0, xs, status):
 
 @jit
 def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, xs, status):
-    """branches.solve_state under pressure control, row by row (:func:`pressure_one`).
+    """Pressure control, row by row (:func:`pressure_one`).
 
     ``kappa`` holds the start values and is overwritten.
     """
@@ -180,7 +180,7 @@ def _solve_pressure(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, xs, sta
 
 @jit
 def solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
-    """branches.solve_state over the rows.
+    """The states of the rows.
 
     Parameters
     ----------
@@ -212,14 +212,14 @@ def solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
 
 @jit
 def solve_observe_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix):
-    """compiled.solve_batch followed by compiled.evaluate_batch at the solved states (one call).
+    """solve_batch followed by the observables of the solved states (one call).
 
     Returns
     -------
     x, kappa, status : as solve_batch
     out, ok : as evaluate_batch (meaningless where status is not OK)
     bad : int
-        First row outside the model or with a non-finite a, alpha, p, d, f, G (compiled.first_bad);
+        First row outside the model or with a non-finite a, alpha, p, d, f, G (``branches.first_bad``);
         -1 if none.
     """
     xs, ks, status = solve_batch(code, pressure, loc, kappa, x0, has_x0, c, w, a_m, L_m, d_fix)
