@@ -48,3 +48,14 @@ def test_cache_key_covers_every_core_module(tmp_path, monkeypatch):
     one = jit.core_hash()
     (tmp_path / "special.py").write_text((tmp_path / "special.py").read_text() + "\n# edit\n")
     assert jit.core_hash() != one
+
+
+def test_every_kernel_is_cached_on_the_core_hash():
+    """The kernels' numba caches are stamped with the hash of all of core/ (not their own file)."""
+    from adhfit.core import history, special  # noqa: PLC0415
+
+    assert jit.KEYED_ON_CORE
+    for kernel in (special.carlson_rf, history.run):
+        locator = kernel._cache._impl.locator
+        assert type(locator).__name__ == "_CoreLocator"
+        assert locator.get_source_stamp() == jit.core_hash()

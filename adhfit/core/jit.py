@@ -15,7 +15,7 @@ from pathlib import Path
 from numba import njit
 from numba.core import caching
 
-__all__ = ["jit", "core_hash"]
+__all__ = ["jit", "core_hash", "KEYED_ON_CORE"]
 
 _CORE = Path(__file__).resolve().parent
 
@@ -29,29 +29,38 @@ def core_hash() -> str:
     return h.hexdigest()
 
 
-_BASE = getattr(caching, "InTreeCacheLocator", None) or getattr(caching, "_InTreeCacheLocator")
-_IMPL = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")
+def _install() -> bool:
+    """Put :class:`_CoreLocator` first among numba's cache locators; False where this numba lacks
+    the (private) hooks, and then each kernel is cached on its own file as numba does by default."""
+    base = getattr(caching, "InTreeCacheLocator", None) or getattr(caching, "_InTreeCacheLocator", None)
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    classes = getattr(impl, "_locator_classes", None)
+    if base is None or not isinstance(classes, list):
+        return False
+
+    class _CoreLocator(base):
+        """numba's in-tree cache locator with the source stamp replaced by :func:`core_hash`."""
+
+        _stamp: str | None = None
+
+        def get_source_stamp(self):
+            if _CoreLocator._stamp is None:
+                _CoreLocator._stamp = core_hash()
+            return _CoreLocator._stamp
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if Path(py_file).resolve().parent != _CORE:
+                return None
+            return super().from_function(py_func, py_file)
+
+    if not any(c.__name__ == "_CoreLocator" for c in classes):
+        classes.insert(0, _CoreLocator)
+    return True
 
 
-class _CoreLocator(_BASE):
-    """numba's in-tree cache locator with the source stamp replaced by :func:`core_hash`."""
-
-    _stamp: str | None = None
-
-    def get_source_stamp(self):
-        if _CoreLocator._stamp is None:
-            _CoreLocator._stamp = core_hash()
-        return _CoreLocator._stamp
-
-    @classmethod
-    def from_function(cls, py_func, py_file):
-        if Path(py_file).resolve().parent != _CORE:
-            return None
-        return super().from_function(py_func, py_file)
-
-
-if _CoreLocator not in _IMPL._locator_classes:
-    _IMPL._locator_classes.insert(0, _CoreLocator)
+#: whether every kernel is keyed on :func:`core_hash` (numba's private cache hooks were found)
+KEYED_ON_CORE = _install()
 
 #: the decorator of every kernel: cached, no GIL, numpy's error model (division by zero gives inf
 #: or NaN instead of raising, as in numpy)
