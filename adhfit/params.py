@@ -104,7 +104,7 @@ DIMENSIONLESS: dict[str, Param] = {
     "p_max": _p("p_max", "P_max b/2μh", "1", None, -1.0, 5.0,
                 "largest pressure reached on loading (pressure control)"),
     "lambda0": _p("lambda0", "λ0", "1", 2.0, 1.0, 100.0, "equibiaxial pre-stretch", upper_open=False),
-    "points": _p("points", "N", "1", 200, 10, 200_000, "approximate number of rows",
+    "points": _p("points", "N", "1", 200, 10, 50_000, "approximate number of rows",
                  lower_open=False, upper_open=False),
 }
 
@@ -162,7 +162,7 @@ def check_scene(control: str, slip: str, *, p: float | None, d: float | None, w:
     out["rs"] = T["rs"].check(rs)
     out["lambda0"] = T["lambda0"].check(lambda0)
     if not isinstance(points, (int, np.integer)) or isinstance(points, bool):
-        raise InputError("points", points, "an integer in [10, 200000]")
+        raise InputError("points", points, "an integer in [10, 50000]")
     out["points"] = int(T["points"].check(points))
 
     ends = {k: v for k, v in (("a_max", a_max), ("delta_max", delta_max), ("p_max", p_max)) if v is not None}

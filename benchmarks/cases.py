@@ -1,4 +1,4 @@
-"""The benchmark cases shared by bench_time.py and bench_backend.py: the paper's base cases for the
+"""The benchmark cases used by bench_time.py: the paper's base cases for the
 8 control x slip x substrate combinations (d = 0.2 on the flat, where d = 0 is outside the domain)."""
 from __future__ import annotations
 

@@ -273,3 +273,45 @@ def test_pressure_no_slip_history_on_the_case_one_boundary():
         want = _ref_state(CASE_I_EDGE, "pressure", "no-slip", "pinning", alpha=alpha)
         bad += [f"alpha={alpha}: {m}" for m in _mismatches(got, want, STATE_KEYS, TOL_STATE)]
     assert not bad, "; ".join(bad)
+
+
+# ---------------------------------------------------------------------------------------------
+# Many rows: the continuation's step budget grows with the rows (it was a fixed 2000 steps, which
+# failed three of the four base cases at points >= 4000). The summary is located by its own root
+# search, so it must not move with the rows; one delamination row is re-solved by the reference.
+# ---------------------------------------------------------------------------------------------
+BASE = [c for c in CASES if c["id"].endswith("-base")]
+
+
+@pytest.mark.parametrize("case", BASE, ids=[c["id"] for c in BASE])
+def test_5000_points_match_the_reference(case):
+    kw = _inputs(case)
+    r = adhfit.simulate(case["control"], case["slip"], **kw, points=5000)
+    frame, summ = r.frame, r.summary
+    assert len(frame) >= 5000
+    ref = case["summary"]
+    bad = _mismatches({"f_max": summ["f_max"]}, ref, ("f_max",), TOL_SUMMARY)
+    for key in ("onset", "f_min", "turning_point"):
+        bad += [f"{key}.{m}" for m in _mismatches(summ[key], ref[key], SUMMARY_KEYS, TOL_SUMMARY)]
+    slim = {k: v for k, v in kw.items() if k in ("p", "d", "w", "rs", "a_max")}
+    rows = frame[frame.stage == "delamination"]
+    bad += _row_mismatches(case["control"], case["slip"], slim, rows.iloc[len(rows) // 3])
+    assert not bad, f"{case['id']}: " + "; ".join(bad)
+
+
+# ---------------------------------------------------------------------------------------------
+# Histories that end where the no-slip delamination branch ends (tests/test_branch_end.py holds
+# state_at there): the history's own row next to the end is the reference's state
+# ---------------------------------------------------------------------------------------------
+BRANCH_END = [("pressure", dict(d=0.0, w=0.2, rs=0.3, a_max=0.25)),
+              ("displacement", dict(p=0.3, w=0.01, rs=0.5, a_max=0.25))]
+
+
+@pytest.mark.slow  # ~15-30 s of reference continuation; CI: test_branch_end.py's states there
+@pytest.mark.parametrize("control,kw", BRANCH_END, ids=[c for c, _ in BRANCH_END])
+def test_rows_next_to_the_branch_end_match_the_reference(control, kw):
+    h = adhfit.simulate(control, "no-slip", **kw)
+    assert "delamination_ends_at_a" in h.inputs
+    dl = h.frame[h.frame.stage == "delamination"]
+    bad = _row_mismatches(control, "no-slip", kw, dl.iloc[len(dl) - 3])
+    assert not bad, "\n".join(bad)

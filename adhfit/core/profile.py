@@ -10,21 +10,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from .integrals import _carlson_pair, quadratic_roots
-from .membrane import edge_angles, sag
+from .membrane import rise_many, roots
 
 __all__ = ["profile", "constants_of_row"]
 
 
-def _rise(kappa, D, C2, x, y, y_is_root):
-    """J1 = int (kappa u + D)/(2 sqrt(u Q(u))) du from u = y to u = x (x > y >= u_minus)."""
-    q, um = quadratic_roots(kappa, D, C2)
-    k2, C = kappa * kappa, C2 - D * D
-    Lx = (q - k2 * x, x - um, x)
-    Ly = (q - k2 * y, np.where(y_is_root, 0.0, y - um), y)
-    with np.errstate(all="ignore"):
-        j0, ju = _carlson_pair(kappa, C, Lx, Ly, x - y)
-    return kappa * ju + D * j0
+def _rise(kappa, D, C2, x, y, y_is_root: bool):
+    """J1 from u = y to u = x, row by row (the compiled :func:`.membrane.rise`)."""
+    x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+    return rise_many(float(kappa), float(D), float(C2), np.ascontiguousarray(x),
+                     np.ascontiguousarray(y), bool(y_is_root))
+
+
+def sag(a, c):
+    """Depth of the substrate at radius a below its apex, rs - sqrt(rs^2 - a^2), finite for rs = inf."""
+    return a * a * c / (1.0 + np.sqrt(1.0 - (a * c) ** 2))
+
+
+def edge_angles(a, c, alpha):
+    """sin and cos of the membrane tangent at the contact edge, theta_a = alpha - asin(a/rs) (eq. 22)."""
+    s, ac = np.sqrt(1.0 - (a * c) ** 2), a * c
+    return s * np.sin(alpha) - ac * np.cos(alpha), s * np.cos(alpha) + ac * np.sin(alpha)
 
 
 def constants_of_row(stage: str, slip: str, a: float, alpha: float, p: float, f: float, G: float,
@@ -77,19 +83,19 @@ def profile(stage: str, slip: str, *, a: float, alpha: float, p: float, d: float
     rc = np.linspace(0.0, a, max(n // 4, 2))
     zc = -d - sag(rc, c)
     _, cos_ta = edge_angles(a, c, alpha)
-    q, um = quadratic_roots(p, D, C2)
+    q, um = roots(float(p), float(D), float(C2))
     if cos_ta >= 0.0:
         r = a + (1.0 - a) * np.linspace(0.0, 1.0, n)
-        z = -_rise(p, D, C2, np.ones(n), r * r, np.zeros(n, bool))
+        z = -_rise(p, D, C2, np.ones(n), r * r, False)
         z[-1] = 0.0
         # the point r = a is the free membrane's own (its rise from the edge), not the substrate's
         return np.concatenate([rc[:-1], r]), np.concatenate([zc[:-1], z])
     eta = float(np.sqrt(um))
     # overhang a -> eta (r decreasing), then eta -> 1
     r1 = a - (a - eta) * np.linspace(0.0, 1.0, n // 2)
-    tail = _rise(p, D, C2, np.ones(1), np.array([um]), np.array([True]))[0]
-    z1 = -(_rise(p, D, C2, r1 * r1, np.full(r1.size, um), np.ones(r1.size, bool)) + tail)
+    tail = _rise(p, D, C2, np.ones(1), np.array([um]), True)[0]
+    z1 = -(_rise(p, D, C2, r1 * r1, np.full(r1.size, um), True) + tail)
     r2 = eta + (1.0 - eta) * np.linspace(0.0, 1.0, n - n // 2)
-    z2 = -_rise(p, D, C2, np.ones(r2.size), r2 * r2, np.zeros(r2.size, bool))
+    z2 = -_rise(p, D, C2, np.ones(r2.size), r2 * r2, False)
     z1[-1], z2[0], z2[-1] = -tail, -tail, 0.0
     return np.concatenate([rc[:-1], r1, r2[1:]]), np.concatenate([zc[:-1], z1, z2[1:]])

@@ -92,11 +92,10 @@ def _provenance(curve, scene, seed, method, options) -> dict:
     import numpy  # noqa: PLC0415
     import scipy  # noqa: PLC0415
     from .. import __version__  # noqa: PLC0415
-    from ..core.backend import active  # noqa: PLC0415
     fields = {f.name: getattr(scene, f.name) for f in dataclasses.fields(scene) if f.name != "source"}
     return {"adhfit_version": __version__, "input": curve.path, "input_sha256": curve.sha256,
             "scene_file": scene.source, "scene": fields, "seed": seed, "method": method, "options": options,
-            "backend": active(), "python": platform.python_version(), "numpy": numpy.__version__,
+            "backend": "numba", "python": platform.python_version(), "numpy": numpy.__version__,
             "scipy": scipy.__version__, "lmfit": lmfit.__version__}
 
 

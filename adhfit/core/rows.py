@@ -1,0 +1,155 @@
+"""A history's summary extrema and its rows in history order (the last steps of ``history.run``).
+
+The turning point of the control variable and the force minimum are refined between the neighbours
+of their best row on its own branch (:func:`.extremum.extremum`) and inserted as rows; the columns
+are stacked free inflation, making contact, pinning, delamination.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .branches import admissible
+from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, extremum
+from .jit import jit
+
+__all__ = ["S_ONSET", "S_FMIN", "S_TP", "extrema", "assemble", "apex"]
+
+#: rows of the summary array: onset, f_min, turning point
+S_ONSET, S_FMIN, S_TP = 0, 1, 2
+
+
+@jit
+def apex(p):
+    """Apex deflection of the free cap d0 = p / (1 + sqrt(1 - p^2)) (eq. 15), NaN where |p| > 1."""
+    if abs(p) > 1.0:
+        return math.nan
+    return p / (1.0 + math.sqrt(1.0 - p * p))
+
+
+@jit
+def _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w, a_m, L_m, d_fix,
+            key, sign):
+    """The extremum between ``lo`` and ``hi`` around row i of one stage: (locator, obs, status)."""
+    n = locs.size
+    j0, j1 = max(i - 2, 0), min(i + 3, n)
+    order = np.argsort(locs[j0:j1])
+    rl = locs[j0:j1][order]
+    rx = (xs[j0:j1] if implicit else np.full(j1 - j0, math.nan))[order]
+    rk = out[2, j0:j1][order]
+    if lo != hi:
+        lo, hi = min(lo, hi), max(lo, hi)
+    else:
+        lo, hi = locs[i], locs[i]
+    st, loc, obs, ok = extremum(code, pressure, lo, hi, rl, rx, rk, 0.0 if pressure else kappa_dc,
+                                c, w, a_m, L_m, d_fix, key, sign, BRENT_XTOL, BRENT_RTOL,
+                                BRENT_MAXITER)
+    if st == E_OK and not admissible(ok, obs):
+        st = -1
+    return loc, obs, st
+
+
+@jit
+def _best_row(out_pin, out_dl, key, sign):
+    """(index in pinning + delamination, value) of the largest sign * key over both stages."""
+    j, best = 0, -math.inf
+    for i in range(out_pin.shape[1]):
+        if sign * out_pin[key, i] > best:
+            j, best = i, sign * out_pin[key, i]
+    for i in range(out_dl.shape[1]):
+        if sign * out_dl[key, i] > best:
+            j, best = out_pin.shape[1] + i, sign * out_dl[key, i]
+    return j, best
+
+
+@jit
+def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, ext_stage, ext_loc,
+            err):
+    """Turning point (e = 0) and force minimum (e = 1) into ``summary``, ``ext_stage`` (1 pinning,
+    2 delamination) and ``ext_loc``; returns the status of the failed search (0 if none), with
+    (stage, which, locator, status) in ``err``. ``pin``, ``dl``: (code, locators, x, implicit, obs)."""
+    for e in range(2):
+        key, sign = ((2, -1.0) if pressure else (3, 1.0)) if e == 0 else (4, -1.0)
+        j, best = _best_row(pin[4], dl[4], key, sign)
+        stage = 1 if j < pin[1].size else 2
+        code, locs, xs, implicit, out = pin if stage == 1 else dl
+        i = j if stage == 1 else j - pin[1].size
+        lo = locs[i - 1] if i > 0 else (0.0 if stage == 1 else a_on)
+        hi = locs[i + 1] if i + 1 < locs.size else locs[i]
+        loc, obs, st = _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w,
+                               a_m, L_m, d_fix, key, sign)
+        if st != E_OK:
+            err[0], err[1], err[2], err[3] = stage, e, loc, st
+            return 1
+        if sign * obs[key] < best:
+            # the row itself is better: the search could not re-solve an end of its bracket (the
+            # end of a no-slip delamination branch, a fold); the extremum is that row
+            loc, obs = locs[i], out[:, i].copy()
+        ext_stage[e], ext_loc[e] = stage, loc
+        summary[S_TP if e == 0 else S_FMIN, :] = obs[:6]
+    # each is also held against the other's state: next to a fold the other search may be better
+    tp, fm = summary[S_TP, :].copy(), summary[S_FMIN, :].copy()
+    tp_stage, tp_loc, fm_stage, fm_loc = ext_stage[0], ext_loc[0], ext_stage[1], ext_loc[1]
+    k_tp, s_tp = (2, -1.0) if pressure else (3, 1.0)
+    if s_tp * fm[k_tp] > s_tp * tp[k_tp]:
+        summary[S_TP, :], ext_stage[0], ext_loc[0] = fm, fm_stage, fm_loc
+    if -tp[4] > -fm[4]:
+        summary[S_FMIN, :], ext_stage[1], ext_loc[1] = tp, tp_stage, tp_loc
+    return 0
+
+
+@jit
+def _insert_at(locs, counts, rank, lc):
+    """(row, found): the first row of stage ``rank`` at or beyond locator ``lc``, and whether that
+    row is ``lc`` itself (then nothing is inserted)."""
+    s0 = counts[0] + (counts[1] if rank == 2 else 0)
+    m = counts[rank]
+    k = m
+    for q in range(m):
+        lq = locs[s0 + q]
+        if (lq <= lc + 1e-15) if rank == 2 else (lq >= lc - 1e-15):
+            k = q
+            break
+    return s0 + k, k < m and abs(locs[s0 + k] - lc) <= 1e-14
+
+
+@jit
+def assemble(pressure, kappa_dc, d_fix, p_cr, mc, pin, dl, summary, ext_stage, ext_loc):
+    """The rows in history order: (cols (7, n) a, alpha, p, d, f, G, delta; counts; tp_pos).
+
+    ``mc``, ``pin``, ``dl``: (locators, obs). The extrema are inserted as rows unless a row already
+    sits at their locator; ``tp_pos`` is the turning point's row.
+    """
+    n_mc, n_pin, n_dl = mc[0].size, pin[0].size, dl[0].size
+    n0 = 1 + n_mc + n_pin + n_dl
+    base = np.zeros((6, n0 + 2))
+    base[2, 0] = p_cr if pressure else kappa_dc
+    base[3, 0] = d_fix if pressure else apex(kappa_dc)
+    locs = np.concatenate((np.zeros(1), mc[0], pin[0], dl[0]))
+    base[:, 1:1 + n_mc] = mc[1][:6]
+    base[:, 1 + n_mc:1 + n_mc + n_pin] = pin[1][:6]
+    base[:, 1 + n_mc + n_pin:n0] = dl[1][:6]
+    counts = np.array([1 + n_mc, n_pin, n_dl], dtype=np.int64)
+    take = np.arange(n0)
+    n_extra, tp_pos = 0, -1
+    for e in (1, 0):  # f_min, then the turning point
+        j, found = _insert_at(locs, counts, ext_stage[e], ext_loc[e])
+        if not found:
+            base[:, n0 + n_extra] = summary[S_TP if e == 0 else S_FMIN, :]
+            take = np.concatenate((take[:j], np.array([n0 + n_extra]), take[j:]))
+            locs = np.concatenate((locs[:j], np.array([ext_loc[e]]), locs[j:]))
+            counts[ext_stage[e]] += 1
+            n_extra += 1
+            if tp_pos >= 0 and j <= tp_pos:
+                tp_pos += 1
+        if e == 0:
+            tp_pos = j
+    cols = np.empty((7, take.size))
+    for r in range(take.size):
+        for k in range(6):
+            cols[k, r] = base[k, take[r]] + 0.0  # + 0.0 turns -0.0 into 0.0
+        if pressure:
+            cols[3, r] = d_fix
+        cols[6, r] = apex(cols[2, r]) - cols[3, r]
+    return cols, counts, tp_pos
