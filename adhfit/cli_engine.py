@@ -1,6 +1,6 @@
 """The command line's first minute: is the compiled engine cached, and load it before the real work.
 
-The numba kernels of :mod:`adhfit.core.compiled` are compiled on the first call in a new environment
+The numba kernels of :mod:`adhfit.core` are compiled on the first call in a new environment
 (about a minute, longer on a busy machine) and loaded from numba's on-disk cache afterwards (about a
 second).  The CLI uses :func:`engine_cache_is_cold` to print a one-line notice before a cold start, and
 :func:`warm_up` to pay the one-off cost before a fit starts its clock, so that the wall time a report
@@ -8,7 +8,6 @@ gives is the fit's own.  Nothing here prints: the CLI does.
 """
 from __future__ import annotations
 
-import os
 import sys
 import threading
 import time
@@ -20,42 +19,26 @@ __all__ = ["engine_cache_is_cold", "warm_up", "COMPILING_NOTICE", "elapsed"]
 COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
 
 
-def _source() -> Path:
-    return Path(__file__).resolve().parent / "core" / "compiled.py"
+def _marker() -> Path:
+    """The file that says the kernels of this exact ``adhfit/core`` tree were compiled and cached.
 
-
-def _cache_dirs(source: Path) -> list[Path]:
-    """Where numba may keep the cache of ``source`` (next to it, or under NUMBA_CACHE_DIR)."""
-    dirs = [source.parent / "__pycache__"]
-    env = os.environ.get("NUMBA_CACHE_DIR")
-    if env:
-        dirs.append(Path(env))
-    return dirs
+    The kernels are cached by numba under one key, a hash of every ``core/*.py``
+    (:func:`adhfit.core.jit.core_hash`); :func:`warm_up` leaves this marker, named after the same
+    hash, once they have been compiled or loaded.  Any edit of ``core/`` changes the name.
+    """
+    from .core.jit import core_hash  # noqa: PLC0415
+    return Path(__file__).resolve().parent / "core" / "__pycache__" / f"engine-{core_hash()[:16]}.ready"
 
 
 def engine_cache_is_cold() -> bool:
-    """True when the compiled kernels will have to be compiled (no numba cache, or one older than the
-    source); False when they are cached, or when the numpy backend or no numba is in use."""
-    if os.environ.get("ADHFIT_BACKEND", "auto").strip().lower() == "numpy":
-        return False
+    """True when the compiled kernels will have to be compiled (no cache for this ``core/`` tree)."""
     try:
         import importlib.util  # noqa: PLC0415
         if importlib.util.find_spec("numba") is None:
             return False
     except (ImportError, ValueError):
         return False
-    source = _source()
-    try:
-        stamp = source.stat().st_mtime
-    except OSError:
-        return False
-    index = []
-    for folder in _cache_dirs(source):
-        if folder.is_dir():
-            index += list(folder.rglob(f"{source.stem}.*.nbi"))
-    if not index:
-        return True
-    return all(p.stat().st_mtime < stamp for p in index)
+    return not _marker().exists()
 
 
 def warm_up(control: str = "displacement") -> float:
@@ -76,6 +59,12 @@ def warm_up(control: str = "displacement") -> float:
     fixed = {"p": 0.6} if control == "displacement" else {"d": 0.0}
     for slip in ("no-slip", "frictionless"):
         simulate(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
+    try:  # a read-only install keeps printing the notice, which is harmless
+        marker = _marker()
+        marker.parent.mkdir(exist_ok=True)
+        marker.touch()
+    except OSError:
+        pass
     return time.perf_counter() - t0
 
 

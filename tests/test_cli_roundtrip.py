@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import json
-import os
-import time
 from pathlib import Path
 
 import numpy as np
@@ -137,24 +135,12 @@ def test_bad_output_folder_is_one_line_before_the_fit(tmp_path, capsys, no_fit, 
 # the compile notice
 # ------------------------------------------------------------------------------------------------
 def test_cold_cache_detection(tmp_path, monkeypatch):
-    src = tmp_path / "core" / "compiled.py"
-    src.parent.mkdir()
-    src.write_text("# kernels\n")
-    monkeypatch.setattr(cli_engine, "_source", lambda: src)
-    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
-    monkeypatch.delenv("ADHFIT_BACKEND", raising=False)
-    assert cli_engine.engine_cache_is_cold()  # no cache at all
-    cache = src.parent / "__pycache__"
-    cache.mkdir()
-    index = cache / "compiled.kernel-12.py311.nbi"
-    index.write_bytes(b"")
-    now = time.time()
-    os.utime(src, (now - 100, now - 100))
-    assert not cli_engine.engine_cache_is_cold()  # a cache newer than the source
-    os.utime(src, (now + 100, now + 100))
-    assert cli_engine.engine_cache_is_cold()  # the source changed since: numba recompiles
-    monkeypatch.setenv("ADHFIT_BACKEND", "numpy")
-    assert not cli_engine.engine_cache_is_cold()  # nothing to compile
+    marker = tmp_path / "__pycache__" / "engine-0123.ready"
+    monkeypatch.setattr(cli_engine, "_marker", lambda: marker)
+    assert cli_engine.engine_cache_is_cold()  # no marker for this core/ tree: numba will compile
+    cli_engine.warm_up("displacement")
+    assert marker.exists()
+    assert not cli_engine.engine_cache_is_cold()  # compiled (or loaded) once: nothing to compile
 
 
 @pytest.mark.parametrize("quiet", [False, True])
