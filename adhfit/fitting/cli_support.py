@@ -33,6 +33,16 @@ def _points(text: str) -> int:
         raise argparse.ArgumentTypeError(f"--points must be an integer in [40, 5000]; got {text!r}") from None
 
 
+def _workers(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"--workers must be a positive integer (local processes); got {text!r}")
+    return value
+
+
 def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     """Add the ``fit`` sub-command to an argparse sub-parser collection; returns its parser."""
     p = subparsers.add_parser(
@@ -62,6 +72,11 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--points", type=_points, default=DEFAULT_POINTS, help="rows per computed history")
     p.add_argument("--no-profile", action="store_true", help="covariance intervals only (faster)")
     p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
+    p.add_argument("--workers", type=_workers, default=None, metavar="N",
+                   help="batch: fit the curves in N local processes (default: one per core)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="batch: fit the curves on the Dask distributed cluster at ADDRESS, e.g. "
+                        "tcp://10.0.0.5:8786 (pip install 'adhfit[dask]'; files on a shared disk)")
     p.set_defaults(run=run_fit)
     return p
 
