@@ -93,6 +93,11 @@ def _x_offset(args, control: str) -> bool:
 
 def run_fit(args) -> int:
     """Run ``adhfit fit`` from parsed arguments; returns the exit status."""
+    from . import batch  # noqa: PLC0415
+    if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
+        if batch.is_batch(args.data):  # before the heavy imports: the workers may do all the fitting
+            return batch.run_batch(args, run_fit)
+        args.data = args.data[0]
     from ..data import read_curve  # noqa: PLC0415
     from ..report.fit_plot import plot_fit  # noqa: PLC0415
     from ..report.json_report import write_json  # noqa: PLC0415
@@ -100,11 +105,6 @@ def run_fit(args) -> int:
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
     from .fit import fit_curve  # noqa: PLC0415
-    from . import batch  # noqa: PLC0415
-    if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
-        if batch.is_batch(args.data):
-            return batch.run_batch(args, run_fit)
-        args.data = args.data[0]
     if args.scene is None:
         args.scene = batch.single_scene(args.data)
     if args.method == "mcmc":

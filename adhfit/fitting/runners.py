@@ -18,6 +18,11 @@ __all__ = ["default_workers", "run_local", "run_dask"]
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
 
+#: modules a local worker needs, imported once by the process the workers fork from
+PRELOAD = ["adhfit.fitting.cli_support", "adhfit.fitting.fit", "adhfit.data", "adhfit.scene",
+           "adhfit.report.json_report", "adhfit.report.markdown", "adhfit.report.html",
+           "adhfit.report.fit_plot", "matplotlib"]
+
 Report = Callable[[Any], None]
 Crashed = Callable[[int, str], Any]
 
@@ -37,8 +42,9 @@ def _context():
     import multiprocessing  # noqa: PLC0415
     if "forkserver" in multiprocessing.get_all_start_methods():
         ctx = multiprocessing.get_context("forkserver")
-        # workers fork from a server that imported the fit once, not from this process's state
-        ctx.set_forkserver_preload(["adhfit.fitting.fit", "adhfit.fitting.cli_support"])
+        # workers fork from a server that imported the fit and the reports once (not from this
+        # process's state); a module that is not there is skipped by the server
+        ctx.set_forkserver_preload(PRELOAD)
         return ctx
     return multiprocessing.get_context("spawn")
 
