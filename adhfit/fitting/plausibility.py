@@ -222,13 +222,13 @@ def _check_scene_pressure(curve, scene, base: float | None) -> None:
     least = FORCE_PER_DISPLACEMENT * abs(pressure) * b * delta
     if least > f_load:
         largest = f_load / (FORCE_PER_DISPLACEMENT * b * delta)
-        raise DataError(f"the scene's pressure {_si(pressure, 'pressure')} needs μh > |P|b/2 = "
+        raise DataError(f"[test] pressure = {_si(pressure, 'pressure')} needs μh > |P|b/2 = "
                         f"{abs(pressure) * b / 2:.3g} N/m (|P b/2μh| < 1), and a membrane that stiff, pressed "
                         f"in by {_si(delta, 'length')}, pushes back with at least {_si(least, 'force')}, but "
                         f"the force column '{_column(curve, 'force')}' rises by only "
                         f"{_as_written(curve, 'force', f_load)}; for these data the pressure must be below "
                         f"about {_si(largest, 'pressure')}: the pressure's unit in the scene is probably wrong "
-                        "(or the force column's)", path=scene.source or curve.path, column="[test] pressure")
+                        "(or the force column's)", path=scene.source or curve.path)
 
 
 def _check_pressure_area(curve, scene, base: float | None) -> None:
