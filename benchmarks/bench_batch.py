@@ -51,16 +51,48 @@ def _summary(out: Path) -> list[dict]:
     return rows
 
 
-def _run(workers: int, extra: list[str], tmp: Path, tag: str) -> tuple[float, list[dict]]:
+def _cpu_tree(proc, seen: dict) -> None:
+    """Record the CPU time (user + system, s) of ``proc`` and of every descendant, by pid."""
+    try:
+        import psutil  # noqa: PLC0415 - optional: only for the CPU accounting
+    except ImportError:
+        return
+    try:
+        root = psutil.Process(proc.pid)
+        for p in [root, *root.children(recursive=True)]:
+            try:
+                t = p.cpu_times()
+                seen[p.pid] = (p.ppid(), t.user + t.system)
+            except psutil.Error:
+                pass
+    except psutil.Error:
+        pass
+
+
+def _run(workers: int, extra: list[str], tmp: Path, tag: str) -> tuple[float, list[dict], dict]:
     out = tmp / tag
     cmd = [sys.executable, "-m", "adhfit.cli", "fit", str(DATA), "--workers", str(workers), "-o", str(out), *extra]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    seen: dict = {}
     t0 = time.perf_counter()
-    done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    while proc.poll() is None:
+        _cpu_tree(proc, seen)
+        time.sleep(0.1)
     wall = time.perf_counter() - t0
-    if done.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)} ended with {done.returncode}:\n{done.stderr[-2000:]}")
-    return wall, _summary(out)
+    _, err = proc.communicate()
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} ended with {proc.returncode}:\n{err[-2000:]}")
+    return wall, _summary(out), _cpu_split(seen, proc.pid)
+
+
+def _cpu_split(seen: dict, parent: int) -> dict:
+    """CPU seconds of the main process, of its other children (the server the workers fork from, the
+    resource tracker) and of each worker (the main process's grandchildren)."""
+    children = {pid for pid, (ppid, _) in seen.items() if ppid == parent}
+    return {"main": seen.get(parent, (0, 0.0))[1],
+            "server": sum(seen[pid][1] for pid in children),
+            "workers": sorted((c for pid, (ppid, c) in seen.items() if ppid in children), reverse=True)}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -74,21 +106,25 @@ def main(argv: list[str] | None = None) -> None:
     n_curves = sum(1 for _ in DATA.glob("*/curve.csv"))
     load0 = os.getloadavg()
     times: dict[str, list[float]] = {"serial": [], "parallel": []}
+    cpu: dict[str, list[dict]] = {"serial": [], "parallel": []}
     with tempfile.TemporaryDirectory() as tmp:
         _run(1, extra + ["--slip", "no-slip", "--no-profile", "--no-plot"], Path(tmp), "warm")  # numba cache
         for k in range(args.repeat):
-            t_s, rows_s = _run(1, extra, Path(tmp), f"s{k}")
-            t_p, rows_p = _run(args.workers, extra, Path(tmp), f"p{k}")
+            t_s, rows_s, c_s = _run(1, extra, Path(tmp), f"s{k}")
+            t_p, rows_p, c_p = _run(args.workers, extra, Path(tmp), f"p{k}")
             if rows_s != rows_p:
                 raise SystemExit("serial and parallel summaries differ")
             times["serial"].append(t_s)
             times["parallel"].append(t_p)
-            print(f"run {k + 1}: serial {t_s:.1f} s, --workers {args.workers} {t_p:.1f} s", flush=True)
+            cpu["serial"].append(c_s)
+            cpu["parallel"].append(c_p)
+            print(f"run {k + 1}: serial {t_s:.1f} s, --workers {args.workers} {t_p:.1f} s; cpu {c_s} / {c_p}",
+                  flush=True)
     load1 = os.getloadavg()
     med = {k: statistics.median(v) for k, v in times.items()}
     result = {"command": " ".join(["python benchmarks/bench_batch.py", *argv]), "curves": n_curves,
               "workers": args.workers, "repeat": args.repeat, "fit_options": extra, "times_s": times,
-              "median_s": med, "ratio_of_medians": med["parallel"] / med["serial"],
+              "median_s": med, "cpu_s": cpu, **_projection(cpu), "ratio_of_medians": med["parallel"] / med["serial"],
               "ratio_of_mins": min(times["parallel"]) / min(times["serial"]), "summaries_identical": True,
               "load_average_start": load0, "load_average_end": load1, "nproc": os.cpu_count(),
               "python": platform.python_version(), "adhfit_revision": _revision()}
@@ -96,6 +132,18 @@ def main(argv: list[str] | None = None) -> None:
     (RESULTS / "batch.json").write_text(json.dumps(result, indent=2) + "\n")
     (RESULTS / "batch.md").write_text(_markdown(result))
     print(_markdown(result))
+
+
+def _projection(cpu: dict) -> dict:
+    """Wall time on an idle machine from the CPU times: serial = its CPU time; parallel = the main
+    process + the server's imports + the busiest worker (the workers run side by side on their cores).
+    A model, not a measurement; it needs psutil to see the worker processes."""
+    if not all(c["workers"] for c in cpu["parallel"]):
+        return {}
+    serial = statistics.median(c["main"] for c in cpu["serial"])
+    parallel = statistics.median(c["main"] + c["server"] + c["workers"][0] for c in cpu["parallel"])
+    return {"idle_projection": {"serial_cpu_s": serial, "parallel_critical_path_cpu_s": parallel,
+                                "ratio": parallel / serial}}
 
 
 def _markdown(r: dict) -> str:
@@ -118,6 +166,22 @@ summary.csv files of every pair are identical in every column but `wall_time_s`.
 
 - median: serial **{r['median_s']['serial']:.1f} s**, `--workers {r['workers']}` **{r['median_s']['parallel']:.1f} s**
 - ratio of the medians: **{r['ratio_of_medians']:.2f}** (target ≤ 0.6); ratio of the mins: {r['ratio_of_mins']:.2f}
+{_projection_text(r)}"""
+
+
+def _projection_text(r: dict) -> str:
+    p = r.get("idle_projection")
+    if not p:
+        return ""
+    split = "; ".join(f"main {c['main']:.1f}, server {c['server']:.1f}, workers "
+                      + ", ".join(f"{w:.1f}" for w in c["workers"]) for c in r["cpu_s"]["parallel"])
+    return f"""
+CPU time (user + system, s, from psutil), which the machine's load hardly changes: serial
+{', '.join(f"{c['main']:.1f}" for c in r['cpu_s']['serial'])}; `--workers {r['workers']}` per run: {split}.
+On an idle machine the serial run would take its CPU time and the parallel run the main process + the
+server's imports + the busiest worker: median **{p['serial_cpu_s']:.1f} s** against
+**{p['parallel_critical_path_cpu_s']:.1f} s**, a projected ratio of **{p['ratio']:.2f}** (a model, not a
+measurement).
 """
 
 

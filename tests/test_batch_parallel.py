@@ -117,3 +117,11 @@ def test_a_worker_process_that_dies_fails_its_curve_only(tmp_path):
     assert [(Path(r["file"]).parent.name, r["status"]) for r in rows] == [
         ("a", "ok"), ("b", "ok"), ("c", "ok"), ("crash", "failed")]
     assert "died" in rows[3]["error"]
+
+
+def test_workers_must_be_a_positive_integer(folder, tmp_path, capsys):
+    assert main(["fit", str(folder), "--workers", "0", "-o", str(tmp_path / "o")]) == 2
+    assert "--workers must be a positive integer" in capsys.readouterr().err
+    assert batch._runner(Namespace(workers=None, scheduler=None), 4)[0] == "local" or os.cpu_count() == 1
+    assert batch._runner(Namespace(workers=3, scheduler=None), 1) == ("serial", None)  # one curve: no pool
+    assert batch._runner(Namespace(), 4) == ("serial", None)  # a Namespace from Python code: this process
