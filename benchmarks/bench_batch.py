@@ -87,12 +87,13 @@ def _run(workers: int, extra: list[str], tmp: Path, tag: str) -> tuple[float, li
 
 
 def _cpu_split(seen: dict, parent: int) -> dict:
-    """CPU seconds of the main process, of its other children (the server the workers fork from, the
-    resource tracker) and of each worker (the main process's grandchildren)."""
+    """CPU seconds of the main process, of a fork server (when the workers fork from one: the main
+    process's children that have children) and of each worker."""
     children = {pid for pid, (ppid, _) in seen.items() if ppid == parent}
-    return {"main": seen.get(parent, (0, 0.0))[1],
-            "server": sum(seen[pid][1] for pid in children),
-            "workers": sorted((c for pid, (ppid, c) in seen.items() if ppid in children), reverse=True)}
+    servers = {pid for pid in children if any(ppid == pid for ppid, _ in seen.values())}
+    workers = [c for pid, (ppid, c) in seen.items() if ppid in servers or (ppid == parent and pid not in servers)]
+    return {"main": seen.get(parent, (0, 0.0))[1], "server": sum(seen[pid][1] for pid in servers),
+            "workers": sorted(workers, reverse=True)}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -176,10 +177,11 @@ def _projection_text(r: dict) -> str:
     split = "; ".join(f"main {c['main']:.1f}, server {c['server']:.1f}, workers "
                       + ", ".join(f"{w:.1f}" for w in c["workers"]) for c in r["cpu_s"]["parallel"])
     return f"""
-CPU time (user + system, s, from psutil), which the machine's load hardly changes: serial
+CPU time (user + system, s, from psutil; less sensitive to the load than wall time, though shared
+caches still inflate it on a busy machine): serial
 {', '.join(f"{c['main']:.1f}" for c in r['cpu_s']['serial'])}; `--workers {r['workers']}` per run: {split}.
 On an idle machine the serial run would take its CPU time and the parallel run the main process + the
-server's imports + the busiest worker: median **{p['serial_cpu_s']:.1f} s** against
+fork server's imports (if any) + the busiest worker: median **{p['serial_cpu_s']:.1f} s** against
 **{p['parallel_critical_path_cpu_s']:.1f} s**, a projected ratio of **{p['ratio']:.2f}** (a model, not a
 measurement).
 """

@@ -9,6 +9,7 @@ other jobs go on.
 from __future__ import annotations
 
 import os
+import sys
 from typing import Any, Callable, Sequence
 
 from ..errors import InputError
@@ -18,7 +19,8 @@ __all__ = ["default_workers", "run_local", "run_dask"]
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
 
-#: modules a local worker needs, imported once by the process the workers fork from
+#: modules a local worker needs, imported once by the fork server (where the workers are not forked
+#: from this process)
 PRELOAD = ["adhfit.fitting.cli_support", "adhfit.fitting.fit", "adhfit.data", "adhfit.scene",
            "adhfit.report.json_report", "adhfit.report.markdown", "adhfit.report.html",
            "adhfit.report.fit_plot", "matplotlib"]
@@ -39,12 +41,16 @@ def default_workers() -> int:
 
 
 def _context():
+    """Linux: fork this process (it has imported half of what a fit needs; a separate server would import
+    it all again, 1-2 s on the critical path).  Elsewhere (fork is unsafe on macOS, absent on Windows):
+    a fork server that imports the fit and the reports once, else spawn."""
     import multiprocessing  # noqa: PLC0415
-    if "forkserver" in multiprocessing.get_all_start_methods():
+    methods = multiprocessing.get_all_start_methods()
+    if sys.platform.startswith("linux") and "fork" in methods:
+        return multiprocessing.get_context("fork")
+    if "forkserver" in methods:
         ctx = multiprocessing.get_context("forkserver")
-        # workers fork from a server that imported the fit and the reports once (not from this
-        # process's state); a module that is not there is skipped by the server
-        ctx.set_forkserver_preload(PRELOAD)
+        ctx.set_forkserver_preload(PRELOAD)  # a module that is not there is skipped by the server
         return ctx
     return multiprocessing.get_context("spawn")
 
