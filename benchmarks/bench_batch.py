@@ -127,12 +127,20 @@ def main(argv: list[str] | None = None) -> None:
               "workers": args.workers, "repeat": args.repeat, "fit_options": extra, "times_s": times,
               "median_s": med, "cpu_s": cpu, **_projection(cpu), "ratio_of_medians": med["parallel"] / med["serial"],
               "ratio_of_mins": min(times["parallel"]) / min(times["serial"]), "summaries_identical": True,
-              "load_average_start": load0, "load_average_end": load1, "nproc": os.cpu_count(),
+              "autogroup": _autogroup(), "load_average_start": load0, "load_average_end": load1, "nproc": os.cpu_count(),
               "python": platform.python_version(), "adhfit_revision": _revision()}
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / "batch.json").write_text(json.dumps(result, indent=2) + "\n")
     (RESULTS / "batch.md").write_text(_markdown(result))
     print(_markdown(result))
+
+
+def _autogroup() -> bool | None:
+    """Whether Linux autogroup scheduling is on (``None``: not Linux, or not known)."""
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip() == "1"
+    except OSError:
+        return None
 
 
 def _projection(cpu: dict) -> dict:
@@ -167,7 +175,18 @@ summary.csv files of every pair are identical in every column but `wall_time_s`.
 
 - median: serial **{r['median_s']['serial']:.1f} s**, `--workers {r['workers']}` **{r['median_s']['parallel']:.1f} s**
 - ratio of the medians: **{r['ratio_of_medians']:.2f}** (target ≤ 0.6); ratio of the mins: {r['ratio_of_mins']:.2f}
-{_projection_text(r)}"""
+{_projection_text(r)}{_autogroup_text(r)}"""
+
+
+def _autogroup_text(r: dict) -> str:
+    if not r.get("autogroup"):
+        return ""
+    return """
+Linux autogroup scheduling is on here: when the machine is saturated, all processes of one session share
+one session's CPU share, so extra worker processes cannot shorten the wall time of a run on a busy
+machine; the wall-time ratio above then measures the load, and the CPU-time projection is the figure to
+read.
+"""
 
 
 def _projection_text(r: dict) -> str:
