@@ -17,6 +17,14 @@ Outputs (batch)
     written even when fits fail; each curve's own reports (report.json, report.md, report.html,
     fit.png) in ``OUTDIR/<path of the curve relative to the common folder, without .csv>/``.
 
+Who runs the curves
+    ``--workers N``: N local processes (default: one per core); ``--scheduler ADDRESS``: the workers of a
+    Dask distributed cluster (``pip install 'adhfit[dask]'``; paths must be reachable from the workers).
+    Each job (:func:`run_job`: curve, scene, options) fits one curve, writes its reports and returns its
+    summary row; the rows are put back in job order, so ``summary.csv`` is the same whichever runs it
+    (only ``wall_time_s``, a measurement, changes from run to run).  One failing curve never stops the
+    others, nor does a worker process that dies.
+
 Exit status
     0 when every curve was fitted; 1 when at least one failed (the table lists it with its error, the
     other curves' reports are written, and standard error ends with the list of failures); 2 for
@@ -24,10 +32,14 @@ Exit status
 """
 from __future__ import annotations
 
+import contextlib
 import csv
+import dataclasses
+import io
 import json
 import os
 import sys
+import threading
 import time
 from argparse import Namespace
 from dataclasses import dataclass
@@ -37,7 +49,7 @@ from typing import Any, Callable, Iterable, Mapping
 from ..errors import AdhfitError, InputError
 
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
-           "run_batch", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED"]
+           "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED"]
 
 SCENE_NAME = "scene.toml"
 EXIT_SOME_FAILED = 1
@@ -213,33 +225,118 @@ def _default_outdir(data: list[Path]) -> Path:
     return Path("adhfit_fit")
 
 
+@dataclass(frozen=True)
+class Outcome:
+    """What one job returns: its place in the batch, its summary row, what the fit printed, and the
+    error message when it failed (``None`` when it was fitted)."""
+
+    index: int
+    row: dict[str, Any]
+    output: str = ""
+    error: str | None = None
+
+
+#: one fit at a time per process: a Dask worker may run tasks in threads, and a fit redirects standard
+#: output and draws with matplotlib, neither of which is thread-safe
+_ONE_AT_A_TIME = threading.Lock()
+
+
+def _absolute(job: Job, base: str) -> Job:
+    """The job with relative paths resolved against ``base`` (the submitting process's folder)."""
+    def fix(p: Path | None) -> Path | None:
+        return p if p is None or Path(p).is_absolute() else Path(base) / p
+    return dataclasses.replace(job, data=fix(job.data), scene=fix(job.scene), out=fix(job.out))
+
+
+def _failed(index: int, job: Job, base: str, error: BaseException | str, args: Namespace,
+            output: str = "") -> Outcome:
+    row = failed_row(_absolute(job, base), error, method=getattr(args, "method", ""),
+                     seed=getattr(args, "seed", None))
+    row.update(file=str(job.data), report_dir=str(job.out), scene="" if job.scene is None else str(job.scene))
+    return Outcome(index, row, output, row["error"])
+
+
+def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace], int], base: str) -> Outcome:
+    """Fit one curve of a batch, in whichever process runs it; never raises for a bad curve.
+
+    Paths are resolved against ``base`` (the working folder of the process that made the jobs); the
+    summary row keeps them as given, so it does not depend on where the job ran.
+    """
+    here = _absolute(job, base)
+    buf = io.StringIO()
+    with _ONE_AT_A_TIME:
+        try:
+            if job.scene is None:
+                raise InputError("scene", None, f"a scene file ({job.scene_note})")
+            one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": here.out})
+            with contextlib.redirect_stdout(buf):
+                status = fit_one(one)
+            if status != 0:
+                raise RuntimeError(f"the fit ended with exit status {status}")
+            report = json.loads((here.out / "report.json").read_text(encoding="utf-8"))
+            return Outcome(index, summary_row(job, report), buf.getvalue())
+        except KeyboardInterrupt:
+            raise
+        except Exception as err:  # noqa: BLE001 - one bad curve must not stop the batch; it is listed
+            return _failed(index, job, base, err, args, buf.getvalue())
+
+
+def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
+    """("serial", None), ("local", workers) or ("dask", address) from ``--workers`` / ``--scheduler``.
+
+    ``args.workers`` is ``None`` for one process per core; a Namespace without it runs in this process.
+    """
+    from .runners import default_workers  # noqa: PLC0415
+    address = getattr(args, "scheduler", None)
+    workers = getattr(args, "workers", 1)
+    if address is not None:
+        if getattr(args, "workers", None) is not None:
+            raise InputError("--workers", workers, "absent when --scheduler is given (the cluster's workers "
+                                                   "run the curves)")
+        return "dask", str(address)
+    workers = default_workers() if workers is None else workers
+    if isinstance(workers, bool) or not (isinstance(workers, int) and workers >= 1):
+        raise InputError("--workers", workers, "a positive integer (local processes)")
+    return ("serial", None) if workers == 1 or n_jobs == 1 else ("local", workers)
+
+
 def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
     """Fit every curve of ``args.data`` with ``fit_one`` (the single-curve ``adhfit fit``); returns the exit
-    status.  Prints one line per curve and, at the end, the failures, on standard error."""
+    status.  ``args.workers`` local processes (``None``: one per core; absent: this process) or the Dask
+    scheduler at ``args.scheduler`` run the curves; the summary is the same whichever does.  Prints one
+    line per curve as it finishes and, at the end, the failures, on standard error."""
     data = [Path(p) for p in args.data]
     outdir = args.output if args.output is not None else _default_outdir(data)
     if args.scene is not None and not Path(args.scene).is_file():
         raise InputError("--scene", str(args.scene), "an existing scene file (TOML)")
     jobs = discover(data, scene=args.scene, outdir=outdir)
-    rows, failures = [], []
+    kind, how = _runner(args, len(jobs))
+    outcomes: dict[int, Outcome] = {}
     t0 = time.perf_counter()
-    for i, job in enumerate(jobs, 1):
-        print(f"[{i}/{len(jobs)}] {job.data}", file=sys.stderr, flush=True)
-        try:
-            if job.scene is None:
-                raise InputError("scene", None, f"a scene file ({job.scene_note})")
-            one = Namespace(**{**vars(args), "data": job.data, "scene": job.scene, "output": job.out})
-            status = fit_one(one)
-            if status != 0:
-                raise RuntimeError(f"the fit ended with exit status {status}")
-            report = json.loads((job.out / "report.json").read_text(encoding="utf-8"))
-            rows.append(summary_row(job, report))
-        except KeyboardInterrupt:
-            raise
-        except Exception as err:  # noqa: BLE001 - one bad curve must not stop the batch; it is listed
-            rows.append(failed_row(job, err, method=args.method, seed=args.seed))
-            failures.append((job, rows[-1]["error"]))
-            print(f"    failed: {rows[-1]['error']}", file=sys.stderr, flush=True)
+    base = os.getcwd()
+
+    def report(out: Outcome) -> None:
+        outcomes[out.index] = out
+        print(f"[{len(outcomes)}/{len(jobs)}] {jobs[out.index].data}", file=sys.stderr, flush=True)
+        if out.output:
+            print(out.output, end="", flush=True)
+        if out.error is not None:
+            print(f"    failed: {out.error}", file=sys.stderr, flush=True)
+
+    calls = [(i, job, args, fit_one, base) for i, job in enumerate(jobs)]
+    if kind == "serial":
+        for call in calls:
+            report(run_job(*call))
+    else:
+        from . import runners  # noqa: PLC0415
+        def crashed(i: int, message: str) -> Outcome:
+            return _failed(i, jobs[i], base, message, args)
+        if kind == "local":
+            runners.run_local(run_job, calls, how, report, crashed)
+        else:
+            runners.run_dask(run_job, calls, how, report, crashed)
+    rows = [outcomes[i].row for i in range(len(jobs))]
+    failures = [(jobs[i], outcomes[i].error) for i in range(len(jobs)) if outcomes[i].error is not None]
     table = write_summary(rows, Path(outdir) / "summary.csv")
     from ..report.summary_html import write_summary_html  # noqa: PLC0415 - a page to look at, next to the table
     write_summary_html(rows, Path(outdir))

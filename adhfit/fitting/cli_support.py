@@ -55,6 +55,16 @@ def read_options(args) -> dict:
     return {k: getattr(args, k) for k in keys if getattr(args, k, None)}
 
 
+def _workers(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"--workers must be a positive integer (local processes); got {text!r}")
+    return value
+
+
 def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     """Add the ``fit`` sub-command to an argparse sub-parser collection; returns its parser."""
     p = subparsers.add_parser(
@@ -97,6 +107,11 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
                    help="the file's force sign (default: compressive-positive)")
     r.add_argument("--displacement-sign", choices=("into-substrate-positive", "away-positive"), default=None,
                    help="the file's displacement sign (default: into-substrate-positive)")
+    p.add_argument("--workers", type=_workers, default=None, metavar="N",
+                   help="batch: fit the curves in N local processes (default: one per core)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="batch: fit the curves on the Dask distributed cluster at ADDRESS, e.g. "
+                        "tcp://10.0.0.5:8786 (pip install 'adhfit[dask]'; files on a shared disk)")
     p.set_defaults(run=run_fit)
     return p
 
@@ -145,17 +160,17 @@ def start_engine(control: str, *, quiet: bool = False) -> float:
 
 def run_fit(args) -> int:
     """Run ``adhfit fit`` from parsed arguments; returns the exit status."""
-    from ..data import read_curve  # noqa: PLC0415
-    from ..scene import load_scene  # noqa: PLC0415
-    from ..units import parse_quantity  # noqa: PLC0415
-    from .fit import fit_curve  # noqa: PLC0415
     from . import batch  # noqa: PLC0415
     if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
-        if batch.is_batch(args.data):
+        if batch.is_batch(args.data):  # before the heavy imports: the workers may do all the fitting
             if args.output is not None:
                 check_output_dir(args.output)
             return batch.run_batch(args, run_fit)
         args.data = args.data[0]
+    from ..data import read_curve  # noqa: PLC0415
+    from ..scene import load_scene  # noqa: PLC0415
+    from ..units import parse_quantity  # noqa: PLC0415
+    from .fit import fit_curve  # noqa: PLC0415
     if args.scene is None:
         args.scene = batch.single_scene(args.data)
     out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")

@@ -137,6 +137,8 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     """
     t0 = time.perf_counter()
     curve, scene = _inputs(data, scene, read_options)
+    from .plausibility import check_curve  # noqa: PLC0415
+    curve, checks = check_curve(curve, scene)  # repeated rows left out; absurd data raise here
     slip = scene.slip if slip is None else slip
     _check_options(method, slip, sigma, points)
     slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
@@ -160,7 +162,7 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         method=method, slip=verdict, parameters=_reported(fits, verdict), fits=fits,
         n_points=len(curve.x), n_excluded=len(curve.excluded), sigma=rep.sigma,
         sigma_source="given" if sigma is not None else SIGMA_ESTIMATED,
-        warnings=tuple(_warnings(scene, fits, verdict, curve)),
+        warnings=tuple(checks + _warnings(scene, fits, verdict, curve)),
         n_evaluations=sum(f.n_evaluations for f in fits.values()),
         n_histories=sum(f.n_histories for f in fits.values()), wall_time=time.perf_counter() - t0,
         provenance=_provenance(curve, scene, seed, method, options), segments=seg.as_dict(),

@@ -1,0 +1,210 @@
+"""Batch fitting on every core (issue 10, item 5): 8 curves serial against ``--workers N``.
+
+The 8 sample curves (``sample_data/*``: both controls, both slips, curved and flat substrates) are fitted
+as one batch through the command line, in a fresh process each time, exactly as a user runs it::
+
+    python -m adhfit.cli fit sample_data --workers 1 -o OUT      # serial
+    python -m adhfit.cli fit sample_data --workers 2 -o OUT      # two local processes
+
+with the default fit options (both slips compared, profile intervals, figures), or the options given
+after ``--``.  Runs alternate (serial, parallel, serial, ...) so that the shared machine's load hits both
+alike; the result is the ratio of the medians, with the load average at the start and the end.  Each
+pair of summaries is checked to be identical (every column but ``wall_time_s``).
+
+Usage::
+
+    python benchmarks/bench_batch.py [--repeat 3] [--workers 2] [-- FIT OPTIONS]
+
+Writes ``benchmarks/results/batch.md`` and ``benchmarks/results/batch.json``.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+DATA = ROOT / "sample_data"
+
+
+def _revision() -> str:
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    return git("rev-parse", "--short", "HEAD") + ("+dirty" if git("status", "--porcelain", "adhfit") else "")
+
+
+def _summary(out: Path) -> list[dict]:
+    with (out / "summary.csv").open(newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows:
+        r.pop("wall_time_s")
+        r["report_dir"] = str(Path(r["report_dir"]).relative_to(out))
+    return rows
+
+
+def _cpu_tree(proc, seen: dict) -> None:
+    """Record the CPU time (user + system, s) of ``proc`` and of every descendant, by pid."""
+    try:
+        import psutil  # noqa: PLC0415 - optional: only for the CPU accounting
+    except ImportError:
+        return
+    try:
+        root = psutil.Process(proc.pid)
+        for p in [root, *root.children(recursive=True)]:
+            try:
+                t = p.cpu_times()
+                seen[p.pid] = (p.ppid(), t.user + t.system)
+            except psutil.Error:
+                pass
+    except psutil.Error:
+        pass
+
+
+def _run(workers: int, extra: list[str], tmp: Path, tag: str) -> tuple[float, list[dict], dict]:
+    out = tmp / tag
+    cmd = [sys.executable, "-m", "adhfit.cli", "fit", str(DATA), "--workers", str(workers), "-o", str(out), *extra]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    seen: dict = {}
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    while proc.poll() is None:
+        _cpu_tree(proc, seen)
+        time.sleep(0.1)
+    wall = time.perf_counter() - t0
+    _, err = proc.communicate()
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} ended with {proc.returncode}:\n{err[-2000:]}")
+    return wall, _summary(out), _cpu_split(seen, proc.pid)
+
+
+def _cpu_split(seen: dict, parent: int) -> dict:
+    """CPU seconds of the main process, of a fork server (when the workers fork from one: the main
+    process's children that have children) and of each worker."""
+    children = {pid for pid, (ppid, _) in seen.items() if ppid == parent}
+    servers = {pid for pid in children if any(ppid == pid for ppid, _ in seen.values())}
+    workers = [c for pid, (ppid, c) in seen.items() if ppid in servers or (ppid == parent and pid not in servers)]
+    return {"main": seen.get(parent, (0, 0.0))[1], "server": sum(seen[pid][1] for pid in servers),
+            "workers": sorted(workers, reverse=True)}
+
+
+def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    extra = argv[argv.index("--") + 1:] if "--" in argv else []
+    own = argv[: argv.index("--")] if "--" in argv else argv
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args(own)
+    n_curves = sum(1 for _ in DATA.glob("*/curve.csv"))
+    load0 = os.getloadavg()
+    times: dict[str, list[float]] = {"serial": [], "parallel": []}
+    cpu: dict[str, list[dict]] = {"serial": [], "parallel": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        _run(1, extra + ["--slip", "no-slip", "--no-profile", "--no-plot"], Path(tmp), "warm")  # numba cache
+        for k in range(args.repeat):
+            t_s, rows_s, c_s = _run(1, extra, Path(tmp), f"s{k}")
+            t_p, rows_p, c_p = _run(args.workers, extra, Path(tmp), f"p{k}")
+            if rows_s != rows_p:
+                raise SystemExit("serial and parallel summaries differ")
+            times["serial"].append(t_s)
+            times["parallel"].append(t_p)
+            cpu["serial"].append(c_s)
+            cpu["parallel"].append(c_p)
+            print(f"run {k + 1}: serial {t_s:.1f} s, --workers {args.workers} {t_p:.1f} s; cpu {c_s} / {c_p}",
+                  flush=True)
+    load1 = os.getloadavg()
+    med = {k: statistics.median(v) for k, v in times.items()}
+    result = {"command": " ".join(["python benchmarks/bench_batch.py", *argv]), "curves": n_curves,
+              "workers": args.workers, "repeat": args.repeat, "fit_options": extra, "times_s": times,
+              "median_s": med, "cpu_s": cpu, **_projection(cpu), "ratio_of_medians": med["parallel"] / med["serial"],
+              "ratio_of_mins": min(times["parallel"]) / min(times["serial"]), "summaries_identical": True,
+              "autogroup": _autogroup(), "load_average_start": load0, "load_average_end": load1, "nproc": os.cpu_count(),
+              "python": platform.python_version(), "adhfit_revision": _revision()}
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / "batch.json").write_text(json.dumps(result, indent=2) + "\n")
+    (RESULTS / "batch.md").write_text(_markdown(result))
+    print(_markdown(result))
+
+
+def _autogroup() -> bool | None:
+    """Whether Linux autogroup scheduling is on (``None``: not Linux, or not known)."""
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip() == "1"
+    except OSError:
+        return None
+
+
+def _projection(cpu: dict) -> dict:
+    """Wall time on an idle machine from the CPU times: serial = its CPU time; parallel = the main
+    process + the server's imports + the busiest worker (the workers run side by side on their cores).
+    A model, not a measurement; it needs psutil to see the worker processes."""
+    if not all(c["workers"] for c in cpu["parallel"]):
+        return {}
+    serial = statistics.median(c["main"] for c in cpu["serial"])
+    parallel = statistics.median(c["main"] + c["server"] + c["workers"][0] for c in cpu["parallel"])
+    return {"idle_projection": {"serial_cpu_s": serial, "parallel_critical_path_cpu_s": parallel,
+                                "ratio": parallel / serial}}
+
+
+def _markdown(r: dict) -> str:
+    opts = " ".join(r["fit_options"]) or "(defaults: both slips compared, profile intervals, figures)"
+    rows = "\n".join(f"| {i + 1} | {s:.1f} | {p:.1f} |"
+                     for i, (s, p) in enumerate(zip(r["times_s"]["serial"], r["times_s"]["parallel"])))
+    return f"""# Batch of {r['curves']} curves: serial against `--workers {r['workers']}`
+
+Command: `{r['command']}`  
+Machine: python {r['python']}, nproc {r['nproc']}, adhfit revision {r['adhfit_revision']}, load average
+(1, 5, 15 min) at start {', '.join(f'{x:.2f}' for x in r['load_average_start'])}, at end
+{', '.join(f'{x:.2f}' for x in r['load_average_end'])} (the machine is shared).  
+Each run: `python -m adhfit.cli fit sample_data --workers N -o OUT` in a fresh process (imports, numba
+cache load, fits, reports, summary.csv), fit options: {opts}. Runs alternate serial / parallel; the two
+summary.csv files of every pair are identical in every column but `wall_time_s`.
+
+| run | serial (s) | --workers {r['workers']} (s) |
+|---:|---:|---:|
+{rows}
+
+- median: serial **{r['median_s']['serial']:.1f} s**, `--workers {r['workers']}` **{r['median_s']['parallel']:.1f} s**
+- ratio of the medians: **{r['ratio_of_medians']:.2f}** (target ≤ 0.6); ratio of the mins: {r['ratio_of_mins']:.2f}
+{_projection_text(r)}{_autogroup_text(r)}"""
+
+
+def _autogroup_text(r: dict) -> str:
+    if not r.get("autogroup"):
+        return ""
+    return """
+Linux autogroup scheduling is on here: when the machine is saturated, all processes of one session share
+one session's CPU share, so extra worker processes cannot shorten the wall time of a run on a busy
+machine; the wall-time ratio above then measures the load, and the CPU-time projection is the figure to
+read.
+"""
+
+
+def _projection_text(r: dict) -> str:
+    p = r.get("idle_projection")
+    if not p:
+        return ""
+    split = "; ".join(f"main {c['main']:.1f}, server {c['server']:.1f}, workers "
+                      + ", ".join(f"{w:.1f}" for w in c["workers"]) for c in r["cpu_s"]["parallel"])
+    return f"""
+CPU time (user + system, s, from psutil; less sensitive to the load than wall time, though shared
+caches still inflate it on a busy machine): serial
+{', '.join(f"{c['main']:.1f}" for c in r['cpu_s']['serial'])}; `--workers {r['workers']}` per run: {split}.
+On an idle machine the serial run would take its CPU time and the parallel run the main process + the
+fork server's imports (if any) + the busiest worker: median **{p['serial_cpu_s']:.1f} s** against
+**{p['parallel_critical_path_cpu_s']:.1f} s**, a projected ratio of **{p['ratio']:.2f}** (a model, not a
+measurement).
+"""
+
+
+if __name__ == "__main__":
+    main()
