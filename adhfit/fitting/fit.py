@@ -101,7 +101,7 @@ def _provenance(curve, scene, seed, method, options) -> dict:
 
 
 def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
-              fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
+              fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
               points: int = DEFAULT_POINTS, profile: bool = True) -> FitResult:
     """Fit W_ad, μh and the slip condition to a measured curve.
 

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..params import FITTED
 from .model import OFFSET_NAME, CurveModel, ModelDomainError
-from .starts import Start, data_start, noise_estimate
+from .starts import Start, data_start
 
 __all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise"]
 
@@ -105,30 +105,23 @@ class Parametrisation:
         return np.array(d)
 
 
-def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float):
-    """The residual vector for lmfit (params -> array).
+def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float | None = None):
+    """The residual vector for lmfit (params -> array): (F_measured - F_model)/scale at every row.
 
-    (F_measured - F_model)/scale at every row, then, when the data show the pull-off jump, one term
-    (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position against the model's turning
-    point, with σ_jump from the row spacing (:attr:`CurveModel.jump`) and σ the force noise (given,
-    or the robust estimate), so that the term has the weight of one observation.
+    The model itself decides which unloading rows are detached (:meth:`CurveModel.attached_weight`),
+    so the pull-off position enters through the rows around it; ``sigma`` is accepted for backward
+    compatibility and unused.
     """
     force = model.force
-    jump = model.jump
-    n = force.size + (jump is not None)
+    n = force.size
 
     def residual(params):
         si = par.si(params.valuesdict())
-        w, mu, off = si["work_of_adhesion"], si["mu_h"], si["x_offset"]
         try:
-            pred = model.predict(w, mu, off, si["force_offset"])
-            r = (force - pred) / scale
-            if jump is None:
-                return r
-            x_tp = model.turning_point(w, mu, off)[0]
+            pred = model.predict(si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"])
         except ModelDomainError:
             return np.full(n, PENALTY)
-        return np.append(r, (jump[0] - x_tp) / jump[1] * sigma / scale)
+        return (force - pred) / scale
     return residual
 
 
@@ -202,7 +195,7 @@ def _run_starts(residual, par, runs, *, scale_covar):
 
 
 def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
-             fit_force_offset: bool = False, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
+             fit_force_offset: bool = True, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
     """Fit W_ad, μh (and offsets) of one slip condition by least squares.
 
     Parameters
@@ -231,9 +224,8 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     f_scale = float(np.max(np.abs(model.force))) or 1.0
     par = Parametrisation(x_scale, f_scale, control, fit_x_offset, fit_force_offset)
     scale = float(sigma) if sigma is not None else f_scale
-    sigma_est = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * f_scale)
-    residual = residual_function(model, par, scale, sigma_est)
-    base = data_start(model, fit_offset=fit_x_offset)
+    residual = residual_function(model, par, scale)
+    base = data_start(model, fit_offset=fit_x_offset, fit_force_offset=fit_force_offset)
     scored = []
     for s in _perturbed(base, par):
         r = residual(par.params(s))
