@@ -30,7 +30,7 @@ from .mcmc import ParallelMap, default_workers, sample_posterior
 from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
 from .posterior import Target, default_priors
 from .result import Estimate, FitResult, clean
-from .selection import compare
+from .selection import SCALE, compare, evidence_word
 from .summary import summarize
 
 __all__ = ["McmcFitResult", "fit_curve_mcmc", "DEFAULTS"]
@@ -118,12 +118,22 @@ def _band(pmap: ParallelMap, target: Target, flat: np.ndarray, sigma: float, n: 
 
 
 def _verdict(probs: dict, lsq_verdict: dict) -> dict:
-    sel = probs["selected"]
+    sel, fav = probs["selected"], probs["favoured"]
+    word = "imposed"
     if len(probs["probabilities"]) == 1:
         verdict = lsq_verdict["verdict"]
-    else:
-        verdict = f"{sel} favoured" if sel else "the data cannot tell them apart"
-    return {"selected": sel, "verdict": verdict, "evidence": "posterior model probability",
+    else:  # the same scale as least squares, on 2 ln B (ln B lowered by 2 Monte-Carlo standard errors)
+        lbf, se = probs["log_bayes_factor"], probs["log_bayes_factor_stderr"]
+        two_ln_b = 2.0 * (lbf - 2.0 * se) if lbf is not None and se is not None else float("nan")
+        word = evidence_word(two_ln_b if math.isfinite(two_ln_b) else float("nan"))
+        p_fav = probs["probabilities"][fav]
+        if word == "cannot tell" and not sel:
+            verdict = "the data cannot tell them apart"
+        else:
+            verdict = f"{fav}: {word} evidence{'' if sel else ', not selected'} (P = {p_fav:.3g})"
+    return {"selected": sel, "verdict": verdict, "evidence": word,
+            "evidence_basis": "posterior model probability (2 ln B on the ΔBIC scale)",
+            "scale": [{"two_ln_bayes_factor_from": lo, "word": w} for lo, w in SCALE],
             "favoured": probs["favoured"], "probabilities": probs["probabilities"],
             "probability_lower": probs["probability_lower"], "threshold": probs["threshold"],
             "log_bayes_factor": probs["log_bayes_factor"], "log_bayes_factor_stderr": probs["log_bayes_factor_stderr"],

@@ -23,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from .lsq import minimise
+from .lsq import PENALTY, minimise
 
-__all__ = ["ProfileLimit", "profile_interval", "critical_value"]
+__all__ = ["ProfileLimit", "profile_interval", "one_side", "critical_value"]
 
 #: stop when sqrt(D/critical) is within this of 1
 TOL = 0.03
@@ -48,6 +48,9 @@ class ProfileLimit:
         A sub-fit found a lower χ² than the optimum (the fit had not converged).
     nfev : int
         Model evaluations spent.
+    open : bool
+        The data do not bound the parameter on this side: χ² stays below the critical value up to the
+        parameter's bound or to the edge of the model's domain (a one-sided result, DESIGN.md A5b).
     """
 
     value: float | None
@@ -55,6 +58,7 @@ class ProfileLimit:
     converged: bool
     better_optimum: bool
     nfev: int
+    open: bool = False
 
 
 def critical_value(n_free: int, sigma_given: bool, level: float = 0.95) -> float:
@@ -74,6 +78,12 @@ def _subfit(residual, best, name, value, cov_shift, scale_covar):
     return minimise(residual, params, scale_covar=scale_covar, max_nfev=200, tol=SUBFIT_TOL)
 
 
+def _outside(res) -> bool:
+    """True when a sub-fit ended outside the model's domain (the residual's penalty marker)."""
+    r = getattr(res, "residual", None)
+    return r is not None and np.size(r) > 0 and bool(np.all(np.abs(r) >= PENALTY * 0.999))
+
+
 def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimit:
     names = list(best.var_names)
     i = names.index(name)
@@ -84,12 +94,18 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
               for o in names if o != name}
     lo, hi = best.params[name].min, best.params[name].max
     t = direction * math.sqrt(crit) * se
-    tried, nfev, better = [], 0, False
+    tried, nfev, better, hit_domain = [], 0, False, False
     for k in range(MAX_SUBFITS):
         value = float(np.clip(theta0 + t, lo, hi))
         res = _subfit(residual, best, name, value, {o: s * (value - theta0) for o, s in slopes.items()},
                       scale_covar)
         nfev += res.nfev
+        if _outside(res):  # beyond the model's domain: the limit, if any, lies closer
+            hit_domain = True
+            above = [p for p in tried if p[1] >= 1.0]
+            t = 0.5 * (t + (min(above, key=lambda p: abs(p[0]))[0] if above else
+                            (tried[-1][0] if tried else 0.0)))
+            continue
         d = (res.chisqr - best.chisqr) / s2
         if d < -1e-6 * max(best.chisqr / s2, 1.0):
             better = True
@@ -98,9 +114,12 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
         if abs(q - 1.0) < TOL:
             return ProfileLimit(value, k + 1, True, better, nfev)
         if value in (lo, hi) and q < 1.0:
-            return ProfileLimit(value, k + 1, False, better, nfev)
+            return ProfileLimit(value, k + 1, False, better, nfev, open=True)
         t = _next_step(tried, direction, se)
-    return ProfileLimit(theta0 + tried[-1][0] if tried else None, len(tried), False, better, nfev)
+    unbracketed = not any(q >= 1.0 for _, q in tried)
+    far = bool(tried) and max(abs(p[0]) for p in tried) > 10.0 * se
+    return ProfileLimit(theta0 + tried[-1][0] if tried else None, len(tried), False, better, nfev,
+                        open=unbracketed and (hit_domain or far or not tried))
 
 
 def _next_step(tried, direction, se):
@@ -116,7 +135,8 @@ def _next_step(tried, direction, se):
     return t1 / q1 if q1 > 0.25 else 4.0 * t1
 
 
-def profile_interval(residual, best, name: str, *, sigma_given: bool) -> tuple[ProfileLimit, ProfileLimit]:
+def profile_interval(residual, best, name: str, *, sigma_given: bool,
+                     level: float = 0.95) -> tuple[ProfileLimit, ProfileLimit]:
     """Lower and upper 95 % profile limits of internal parameter ``name`` of an lmfit result.
 
     Parameters
@@ -129,9 +149,20 @@ def profile_interval(residual, best, name: str, *, sigma_given: bool) -> tuple[P
         Internal parameter name (e.g. ``"ln_work_of_adhesion"``).
     sigma_given : bool
         Whether the residuals are in units of a known σ (χ² test) or σ is estimated (F-test).
+    level : float
+        Two-sided level (0.90 gives the one-sided 95 % bound of a side whose other side is open).
     """
     n_free = int(best.ndata - best.nvarys)
-    crit = critical_value(n_free, sigma_given)
+    crit = critical_value(n_free, sigma_given, level)
     s2 = 1.0 if sigma_given else best.chisqr / max(n_free, 1)
     return (_side(residual, best, name, -1.0, crit, s2, not sigma_given),
             _side(residual, best, name, +1.0, crit, s2, not sigma_given))
+
+
+def one_side(residual, best, name: str, direction: float, *, sigma_given: bool,
+             level: float = 0.90) -> ProfileLimit:
+    """One profile limit at a two-sided ``level`` (0.90: a one-sided 95 % bound)."""
+    n_free = int(best.ndata - best.nvarys)
+    crit = critical_value(n_free, sigma_given, level)
+    s2 = 1.0 if sigma_given else best.chisqr / max(n_free, 1)
+    return _side(residual, best, name, direction, crit, s2, not sigma_given)
