@@ -268,7 +268,7 @@ class CurveModel:
     """
 
     def __init__(self, curve, scene, slip: str, *, points: int = DEFAULT_POINTS,
-                 segments: Segments | None = None) -> None:
+                 segments: Segments | None = None, fixed_split: bool = False) -> None:
         if slip not in ("no-slip", "frictionless"):
             raise InputError("slip", slip, "one of 'no-slip', 'frictionless'")
         if curve.control != scene.control:
@@ -280,8 +280,10 @@ class CurveModel:
         self.force = np.asarray(curve.force, float)
         self.x_max = float(self.x[self.segments.i_turn])
         self._loading = self.segments.loading
-        # every unloading row is attached or detached as the parameters say (see predict)
-        self._attached = np.arange(self.x.size) > self.segments.i_turn
+        self.fixed_split = bool(fixed_split)
+        # free split: every unloading row is attached or detached as the parameters say (see predict);
+        # fixed split: the rows of ``segments`` (attached ones clamped beyond the turning point)
+        self._attached = self.segments.attached if self.fixed_split else np.arange(self.x.size) > self.segments.i_turn
         self._run_min = np.minimum.accumulate(self.x[self._attached]) if self._attached.any() else self.x[:0]
         steps = np.abs(np.diff(self.x[self.segments.i_turn:]))
         steps = steps[steps > 0]
@@ -361,7 +363,9 @@ class CurveModel:
         xd = self.dimensionless_x(mu_h, x_offset)
         f = np.zeros(xd.shape)
         f[self._loading] = pcs.f_loading(xd[self._loading])
-        f[self._attached] = pcs.f_unloading(xd[self._attached]) * self.attached_weight(mu_h, x_offset, pcs)
+        f[self._attached] = pcs.f_unloading(xd[self._attached])
+        if not self.fixed_split:
+            f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
         return self.scene.scales(float(mu_h)).from_f(f) + force_offset
 
     def attached_weight(self, mu_h: float, x_offset: float, pcs: Pieces) -> np.ndarray:
@@ -373,6 +377,8 @@ class CurveModel:
         spacing wide, centred on x_tp (the jump happened somewhere between two rows), so that χ² is
         continuous in the parameters.
         """
+        if self.fixed_split:
+            return np.ones(int(self._attached.sum()))
         if not self._run_min.size:
             return self._run_min
         run = self.dimensionless_x(mu_h, x_offset, self._run_min)
@@ -383,6 +389,8 @@ class CurveModel:
     def split(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> int | None:
         """First detached row for these parameters (weight below 1/2), ``None`` when the data end
         before the model's pull-off."""
+        if self.fixed_split:
+            return self.segments.i_jump
         pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
         wt = self.attached_weight(mu_h, x_offset, pcs)
         det = np.flatnonzero(wt < 0.5)
@@ -390,14 +398,15 @@ class CurveModel:
 
     @property
     def jump(self) -> tuple[float, float] | None:
-        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units.
+        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units
+        (fixed split only: with a free split the rows themselves carry it).
 
         The jump happened between the last attached row and the first detached row: x_jump is their
         midpoint and σ_jump = |spacing|/sqrt(12), the standard deviation of a position known only to
         lie in that interval.  ``None`` when the data end before pull-off.
         """
         j = self.segments.i_jump
-        if j is None:
+        if j is None or not self.fixed_split:
             return None
         x_a, x_d = self.x[j - 1], self.x[j]
         return float(0.5 * (x_a + x_d)), max(abs(float(x_a - x_d)), 1e-12 * self.x_max) / math.sqrt(12.0)

@@ -162,7 +162,7 @@ class Target:
         self.scale = float(sigma) if sigma is not None else par.f_scale
         sigma_jump = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * par.f_scale)
         self._residual = residual_function(model, par, self.scale, sigma_jump)
-        self.n = model.force.size
+        self.n = model.force.size + (model.jump is not None)
 
     @property
     def ndim(self) -> int:
