@@ -91,7 +91,8 @@ class Parametrisation:
     def si(self, values: dict) -> dict:
         """Internal values (a dict or lmfit Parameters) -> SI dict with all four model arguments."""
         v = {k: float(getattr(values[k], "value", values[k])) for k in values}
-        return {"work_of_adhesion": math.exp(v["ln_work_of_adhesion"]), "mu_h": math.exp(v["ln_mu_h"]),
+        return {"work_of_adhesion": math.exp(min(v["ln_work_of_adhesion"], 700.0)),
+                "mu_h": math.exp(min(v["ln_mu_h"], 700.0)),
                 "x_offset": v.get("x_offset", 0.0) * self.x_scale,
                 "force_offset": v.get("force_offset", 0.0) * self.f_scale}
 
@@ -267,7 +268,19 @@ def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start
         return raw
     if j is None or j >= m.x.size - 1 or j <= m.segments.i_turn + 1:
         return raw
-    f = m.force
+    best = None
+    for cand in (j, j - 1, j + 1):  # the free split can stop one row off: let χ² pick among neighbours
+        if not m.segments.i_turn + 1 < cand < m.x.size:
+            continue
+        fit = _fixed_fit(raw, cand, sigma, sigma_est, base, si)
+        if best is None or fit.best.chisqr < best.best.chisqr:
+            best = fit
+    return best
+
+
+def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict) -> RawFit:
+    """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
+    m, par, f = raw.model, raw.par, raw.model.force
     seg = Segments(n=m.segments.n, i_turn=m.segments.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
     fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True)
     residual = residual_function(fixed, par, raw.scale, sigma_est)

@@ -29,7 +29,9 @@ __all__ = ["ProfileLimit", "profile_interval", "one_side", "critical_value"]
 
 #: stop when sqrt(D/critical) is within this of 1
 TOL = 0.03
-MAX_SUBFITS = 6
+MAX_SUBFITS = 8
+#: largest first step of a profile, internal units (a factor e in W_ad or μh)
+MAX_FIRST_STEP = 1.0
 #: tolerance of the sub-fits (see lsq.minimise)
 SUBFIT_TOL = 1e-5
 
@@ -48,6 +50,8 @@ class ProfileLimit:
         A sub-fit found a lower χ² than the optimum (the fit had not converged).
     nfev : int
         Model evaluations spent.
+    outer : float or None
+        The probe nearest the optimum whose χ² exceeded the critical value (internal units).
     open : bool
         The data do not bound the parameter on this side: χ² stays below the critical value up to the
         parameter's bound or to the edge of the model's domain (a one-sided result, DESIGN.md A5b).
@@ -59,6 +63,12 @@ class ProfileLimit:
     better_optimum: bool
     nfev: int
     open: bool = False
+    outer: float | None = None
+
+    @property
+    def bound(self) -> float | None:
+        """The limit if found, else the nearest probe known to lie beyond it (a conservative limit)."""
+        return self.value if self.converged else self.outer
 
 
 def critical_value(n_free: int, sigma_given: bool, level: float = 0.95) -> float:
@@ -75,6 +85,9 @@ def _subfit(residual, best, name, value, cov_shift, scale_covar):
         p.value = float(np.clip(best.params[other].value + shift, p.min, p.max))
     params[name].value = value
     params[name].vary = False
+    if np.all(np.abs(residual(params)) >= PENALTY * 0.999):  # the warm start left the model's domain
+        for other in cov_shift:
+            params[other].value = best.params[other].value
     return minimise(residual, params, scale_covar=scale_covar, max_nfev=200, tol=SUBFIT_TOL)
 
 
@@ -90,8 +103,9 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
     theta0 = best.params[name].value
     cov = best.covar
     se = math.sqrt(cov[i, i]) if cov is not None and cov[i, i] > 0 else 0.1
-    slopes = {o: (cov[names.index(o), i] / cov[i, i] if cov is not None and cov[i, i] > 0 else 0.0)
+    slopes = {o: (cov[names.index(o), i] / cov[i, i] if cov is not None and 0 < cov[i, i] < 1.0 else 0.0)
               for o in names if o != name}
+    se = min(se, MAX_FIRST_STEP)  # a flat direction (huge se) is explored from a sane first step
     lo, hi = best.params[name].min, best.params[name].max
     t = direction * math.sqrt(crit) * se
     tried, nfev, better, hit_domain = [], 0, False, False
@@ -116,10 +130,11 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
         if value in (lo, hi) and q < 1.0:
             return ProfileLimit(value, k + 1, False, better, nfev, open=True)
         t = _next_step(tried, direction, se)
-    unbracketed = not any(q >= 1.0 for _, q in tried)
+    above = [t for t, q in tried if q >= 1.0]
     far = bool(tried) and max(abs(p[0]) for p in tried) > 10.0 * se
+    outer = theta0 + min(above, key=abs) if above else None
     return ProfileLimit(theta0 + tried[-1][0] if tried else None, len(tried), False, better, nfev,
-                        open=unbracketed and (hit_domain or far or not tried))
+                        open=not above and (hit_domain or far or not tried), outer=outer)
 
 
 def _next_step(tried, direction, se):

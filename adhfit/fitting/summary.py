@@ -30,6 +30,8 @@ INTERNAL = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h", "displ
 #: profile and covariance half-widths differing by more than this fraction earn a warning
 DISAGREE = 0.25
 Z95 = float(stats.norm.ppf(0.975))
+#: standard error of ln W_ad or ln μh above which the covariance says nothing (a factor e^1.5·1.96 ≈ 20)
+MAX_LOG_SE = 1.5
 
 
 def _estimates(raw: RawFit, profiles: dict) -> dict[str, Estimate]:
@@ -42,7 +44,9 @@ def _estimates(raw: RawFit, profiles: dict) -> dict[str, Estimate]:
         value = si[name] if name in si else si["x_offset"]  # displacement_offset, pressure_offset
         factor = value if log else (par.x_scale if name != "force_offset" else par.f_scale)
         se_int = p.stderr if (p.stderr is not None and np.isfinite(p.stderr) and p.stderr > 0) else None
-        back = (lambda t: math.exp(t)) if log else (lambda t, f=factor: t * f)
+        back = (lambda t: math.exp(min(t, 700.0))) if log else (lambda t, f=factor: t * f)
+        if log and se_int is not None and se_int > MAX_LOG_SE:  # a factor > 20 either way: not a number
+            se_int = None
         cov_ci = (back(p.value - Z95 * se_int), back(p.value + Z95 * se_int)) if se_int else None
         ci, method = cov_ci, ("covariance" if cov_ci else None)
         status = "determined" if cov_ci else "undetermined"
@@ -59,13 +63,13 @@ def _from_profile(prof, back, ci, method, status):
     if lo.open and hi.open:
         return None, "profile", "undetermined"
     if hi.open:
-        return ((back(lo.value), None), "profile (one-sided 95 %)", "lower_bound") if lo.converged \
+        return ((back(lo.bound), None), "profile (one-sided 95 %)", "lower_bound") if lo.bound is not None \
             else (None, "profile", "undetermined")
     if lo.open:
-        return ((None, back(hi.value)), "profile (one-sided 95 %)", "upper_bound") if hi.converged \
+        return ((None, back(hi.bound)), "profile (one-sided 95 %)", "upper_bound") if hi.bound is not None \
             else (None, "profile", "undetermined")
-    if lo.converged and hi.converged:
-        return (back(lo.value), back(hi.value)), "profile", "determined"
+    if lo.bound is not None and hi.bound is not None:
+        return (back(lo.bound), back(hi.bound)), "profile", "determined"
     return ci, method, status
 
 
@@ -164,7 +168,7 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
             if hi.open != lo.open:  # one side only: its one-sided 95 % bound (the two-sided 90 % limit)
                 d = -1.0 if hi.open else 1.0
                 side = one_side(residual, best, INTERNAL[name], d, sigma_given=raw.sigma_given)
-                if side.converged:
+                if side.bound is not None:
                     lo, hi = (side, hi) if hi.open else (lo, side)
             profiles[name] = (lo, hi)
     est = _estimates(raw, profiles)
