@@ -2,7 +2,12 @@
 
 Fitted parameters (rows of :data:`adhfit.params.FITTED`): ``work_of_adhesion`` and ``mu_h``, plus the
 nuisance ``displacement_offset`` (on by default under displacement control) or ``pressure_offset``
-(off by default) and ``force_offset`` (off by default).
+(off by default) and ``force_offset`` (the load-cell zero, on by default: the rows before contact
+and after pull-off pin it).
+
+* **Two stages**: the free-split model (:class:`~.model.CurveModel`) finds the detachment row by
+  likelihood; then the split is fixed at that row and its neighbours, each refitted with the
+  pull-off position term, and the lowest χ² wins (:func:`_refit_fixed`).
 
 * **Parametrisation**: the optimiser sees ln W_ad, ln μh, the offset over the data's control range
   and the force offset over the largest force, so every internal parameter is O(1) and its
