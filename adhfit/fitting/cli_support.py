@@ -88,7 +88,10 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
                    help="output directory (default: ./<DATA stem>_fit)")
     p.add_argument("--sigma", default=None, metavar="FORCE",
                    help="force noise, e.g. '0.01 mN' (default: estimated from the residuals)")
-    p.add_argument("--force-offset", action="store_true", help="also fit a load-cell offset")
+    p.add_argument("--force-offset", action="store_true",
+                   help="fit the load-cell zero (the default; kept for older scripts)")
+    p.add_argument("--no-force-offset", action="store_true",
+                   help="fix the load-cell zero at 0 instead of fitting it (the data must be tared)")
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit the displacement offset (displacement control)")
     p.add_argument("--pressure-offset", action="store_true", help="fit a pressure offset (pressure control)")
@@ -158,6 +161,12 @@ def start_engine(control: str, *, quiet: bool = False) -> float:
     return warm_up(control)
 
 
+def _force_offset(args) -> bool:
+    if args.no_force_offset and args.force_offset:
+        raise InputError("--no-force-offset", True, "absent when --force-offset is given")
+    return not args.no_force_offset
+
+
 def run_fit(args) -> int:
     """Run ``adhfit fit`` from parsed arguments; returns the exit status."""
     from . import batch  # noqa: PLC0415
@@ -186,7 +195,7 @@ def run_fit(args) -> int:
     from ..cli_engine import elapsed  # noqa: PLC0415
     with elapsed(f"fitting {Path(args.data).name}", enabled=False if quiet else None):
         result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
-                           fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
+                           fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
                            seed=args.seed, points=args.points, profile=not args.no_profile)
     write_reports(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
     print(_summary(result, out))

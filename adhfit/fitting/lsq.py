@@ -2,7 +2,12 @@
 
 Fitted parameters (rows of :data:`adhfit.params.FITTED`): ``work_of_adhesion`` and ``mu_h``, plus the
 nuisance ``displacement_offset`` (on by default under displacement control) or ``pressure_offset``
-(off by default) and ``force_offset`` (off by default).
+(off by default) and ``force_offset`` (the load-cell zero, on by default: the rows before contact
+and after pull-off pin it).
+
+* **Two stages**: the free-split model (:class:`~.model.CurveModel`) finds the detachment row by
+  likelihood; then the split is fixed at that row and its neighbours, each refitted with the
+  pull-off position term, and the lowest χ² wins (:func:`_refit_fixed`).
 
 * **Parametrisation**: the optimiser sees ln W_ad, ln μh, the offset over the data's control range
   and the force offset over the largest force, so every internal parameter is O(1) and its
@@ -19,6 +24,7 @@ nuisance ``displacement_offset`` (on by default under displacement control) or `
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -26,7 +32,7 @@ import lmfit
 import numpy as np
 
 from ..params import FITTED
-from .model import OFFSET_NAME, CurveModel, ModelDomainError
+from .model import OFFSET_NAME, CurveModel, ModelDomainError, Segments
 from .starts import Start, data_start, noise_estimate
 
 __all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise"]
@@ -36,6 +42,8 @@ DIFF_STEP = 1e-6
 #: optimiser tolerances (scipy ftol = xtol = gtol) at an optimum, and for a start's first descent
 FINE_TOL = 1e-8
 COARSE_TOL = 1e-5
+#: W_ad/μh range of the model (adhfit.params.DIMENSIONLESS["w"])
+W_RANGE = (1e-6, 10.0)
 #: residual of a parameter set outside the model's domain, per row, in units of s
 PENALTY = 1e3
 
@@ -73,11 +81,17 @@ class Parametrisation:
     def params(self, start: Start) -> lmfit.Parameters:
         """lmfit Parameters at ``start`` with the bounds of the parameter table (SI -> internal)."""
         p = lmfit.Parameters()
+        # box bounds inside the model's domain (w = W_ad/μh in [1e-6, 10]) around the start's μh, with a
+        # margin: a flat W_ad (a test stopped before delamination) must not send the optimiser far away
+        mu0 = float(start["mu_h"])
+        box = {"work_of_adhesion": (math.log(W_RANGE[0] * mu0) - 1.5, math.log(W_RANGE[1] * mu0) + 1.5),
+               "mu_h": (math.log(mu0) - 7.0, math.log(mu0) + 7.0)}
         for name in ("work_of_adhesion", "mu_h"):
             row = FITTED[name]
-            lo = math.log(row.lower) if row.lower > 0 else -np.inf
-            hi = math.log(row.upper) if math.isfinite(row.upper) else np.inf
-            p.add(f"ln_{name}", value=math.log(start[name]), min=lo, max=hi)
+            lo = max(math.log(row.lower) if row.lower > 0 else -np.inf, box[name][0])
+            hi = min(math.log(row.upper) if math.isfinite(row.upper) else np.inf, box[name][1])
+            value = float(np.clip(math.log(start[name]), lo + 1e-9, hi - 1e-9))
+            p.add(f"ln_{name}", value=value, min=lo, max=hi)
         if self.fit_x_offset:
             row = FITTED[OFFSET_NAME[self.control]]
             p.add("x_offset", value=start["x_offset"] / self.x_scale, min=row.lower / self.x_scale,
@@ -91,7 +105,8 @@ class Parametrisation:
     def si(self, values: dict) -> dict:
         """Internal values (a dict or lmfit Parameters) -> SI dict with all four model arguments."""
         v = {k: float(getattr(values[k], "value", values[k])) for k in values}
-        return {"work_of_adhesion": math.exp(v["ln_work_of_adhesion"]), "mu_h": math.exp(v["ln_mu_h"]),
+        return {"work_of_adhesion": math.exp(min(v["ln_work_of_adhesion"], 700.0)),
+                "mu_h": math.exp(min(v["ln_mu_h"], 700.0)),
                 "x_offset": v.get("x_offset", 0.0) * self.x_scale,
                 "force_offset": v.get("force_offset", 0.0) * self.f_scale}
 
@@ -105,17 +120,20 @@ class Parametrisation:
         return np.array(d)
 
 
-def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float):
+def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float | None = None):
     """The residual vector for lmfit (params -> array).
 
-    (F_measured - F_model)/scale at every row, then, when the data show the pull-off jump, one term
-    (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position against the model's turning
-    point, with σ_jump from the row spacing (:attr:`CurveModel.jump`) and σ the force noise (given,
-    or the robust estimate), so that the term has the weight of one observation.
+    (F_measured - F_model)/scale at every row.  With a free split the model itself decides which
+    unloading rows are detached (:meth:`CurveModel.attached_weight`).  With a fixed split that shows
+    the pull-off, one more term (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position
+    against the model's turning point, with σ_jump = spacing/√12 (:attr:`CurveModel.jump`) and σ the
+    force noise (given, or the robust estimate), so that the term has the weight of one observation.
     """
     force = model.force
     jump = model.jump
     n = force.size + (jump is not None)
+    if sigma is None:
+        sigma = noise_estimate(force) or 1e-3 * float(np.max(np.abs(force)) or 1.0)
 
     def residual(params):
         si = par.si(params.valuesdict())
@@ -140,8 +158,9 @@ def minimise(residual, params: lmfit.Parameters, *, scale_covar: bool, max_nfev:
     χ² to ~1e-4 relative (a few hundredths of σ² on ~10² rows).
     """
     mini = lmfit.Minimizer(residual, params, scale_covar=scale_covar)
-    return mini.minimize(method="least_squares", max_nfev=max_nfev, diff_step=DIFF_STEP,
-                         x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
+    with np.errstate(invalid="ignore"):  # a flat direction: lmfit's sqrt of a negative variance -> no stderr
+        return mini.minimize(method="least_squares", max_nfev=max_nfev, diff_step=DIFF_STEP,
+                             x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
 
 
 @dataclass(frozen=True)
@@ -159,6 +178,9 @@ class RawFit:
     sigma_given : bool
     starts : list of dict
         Each start (SI) with the χ² it reached.
+    alternatives : tuple of dict
+        The optima (SI) with the pull-off at a neighbouring row, and their χ² above the best
+        (``dchisqr``, residual units): the ones the data cannot reject widen the intervals.
     """
 
     slip: str
@@ -168,6 +190,7 @@ class RawFit:
     scale: float
     sigma_given: bool
     starts: list
+    alternatives: tuple = ()
 
 
 def _perturbed(start: Start, par: Parametrisation) -> list[Start]:
@@ -202,7 +225,7 @@ def _run_starts(residual, par, runs, *, scale_covar):
 
 
 def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
-             fit_force_offset: bool = False, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
+             fit_force_offset: bool = True, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
     """Fit W_ad, μh (and offsets) of one slip condition by least squares.
 
     Parameters
@@ -233,7 +256,7 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     scale = float(sigma) if sigma is not None else f_scale
     sigma_est = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * f_scale)
     residual = residual_function(model, par, scale, sigma_est)
-    base = data_start(model, fit_offset=fit_x_offset)
+    base = data_start(model, fit_offset=fit_x_offset, fit_force_offset=fit_force_offset)
     scored = []
     for s in _perturbed(base, par):
         r = residual(par.params(s))
@@ -241,5 +264,44 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     scored.sort(key=lambda t: t[0])
     runs = [s for _, s in scored[:n_runs]] + [Start(base, **e) for e in extra_starts]
     best, starts = _run_starts(residual, par, runs, scale_covar=sigma is None)
-    return RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
-                  sigma_given=sigma is not None, starts=starts)
+    raw = RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
+                 sigma_given=sigma is not None, starts=starts)
+    return raw if model.fixed_split else _refit_fixed(raw, sigma, sigma_est, base)
+
+
+def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start) -> RawFit:
+    """Second stage: fix the row split the free-split fit found and refit with the pull-off term.
+
+    The free split finds the detachment row by likelihood (no threshold); but with it the pull-off
+    position would be known to a fraction of a row (the ramp is steep when the jump is large against
+    the noise), while the data only place it somewhere between two rows.  The fixed split with the
+    pull-off term (σ_jump = spacing/√12) gives it its honest uncertainty.  Without a detached row
+    (the data end before the model's pull-off) the free-split fit is kept: there the rows must all
+    stay attached, which is what bounds W_ad from below.
+    """
+    m, par = raw.model, raw.par
+    si = par.si(raw.best.params)
+    try:
+        j = m.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+    except ModelDomainError:
+        return raw
+    if j is None or j >= m.x.size - 1 or j <= m.segments.i_turn + 1:
+        return raw
+    fits = [_fixed_fit(raw, cand, sigma, sigma_est, base, si) for cand in (j, j - 1, j + 1)
+            if m.segments.i_turn + 1 < cand < m.x.size]  # the free split can stop one row off
+    best = min(fits, key=lambda f: f.best.chisqr)
+    alts = tuple(dict(f.par.si(f.best.params), dchisqr=float(f.best.chisqr - best.best.chisqr),
+                      split=f.model.segments.i_jump) for f in fits if f is not best)
+    return dataclasses.replace(best, alternatives=alts)
+
+
+def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict) -> RawFit:
+    """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
+    m, par, f = raw.model, raw.par, raw.model.force
+    seg = Segments(n=m.segments.n, i_turn=m.segments.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
+    fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True)
+    fixed.n_histories, fixed.n_evaluations = m.n_histories, m.n_evaluations  # the cost of stage 1 too
+    residual = residual_function(fixed, par, raw.scale, sigma_est)
+    best, starts = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None)
+    return RawFit(slip=m.slip, best=best, model=fixed, par=par, scale=raw.scale,
+                  sigma_given=raw.sigma_given, starts=raw.starts + starts)

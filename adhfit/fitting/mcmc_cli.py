@@ -14,7 +14,7 @@ def run_fit_mcmc(args) -> int:
     from ..data import read_curve  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from .cli_support import _summary, _x_offset, check_output_dir, read_options, start_engine  # noqa: PLC0415
+    from .cli_support import _force_offset, _summary, _x_offset, check_output_dir, read_options, start_engine  # noqa: PLC0415
     from .cli_support import write_reports  # noqa: PLC0415
     from .mcmc_fit import fit_curve_mcmc  # noqa: PLC0415
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
@@ -25,7 +25,7 @@ def run_fit_mcmc(args) -> int:
     startup = start_engine(scene.control, quiet=quiet)
     out.mkdir(parents=True, exist_ok=True)  # the chains are written while sampling
     result = fit_curve_mcmc(curve, scene, slip=args.slip, sigma=sigma,
-                            fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
+                            fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
                             seed=args.seed, points=args.points, outdir=out, progress=False if quiet else None)
     images = {}
     if not args.no_plot:

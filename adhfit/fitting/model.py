@@ -5,23 +5,25 @@ A measured curve is a history: loading (the control variable rises to its larges
 
 * **loading rows** (``0 .. i_turn``): zero force before contact (δ < 0 under displacement control,
   p < p_cr under pressure control), then the making-contact branch;
-* **attached unloading rows** (after ``i_turn``, before the measured detachment jump): contact pinning
-  then delamination, down to the turning point of the control variable (least δ or least p);
-  a row whose control value lies beyond the model's turning point is given the turning-point force
-  (a clamp that keeps the residual continuous in the parameters while the model and the data
-  disagree about where pull-off happens);
-* **detached rows** (from the measured jump on): the free membrane, zero force.
+* **unloading rows** (after ``i_turn``): contact pinning then delamination down to the turning point
+  of the control variable (least δ or least p), then the free membrane (zero force).  By default
+  (**free split**) the model itself decides which rows are detached: a row is detached once the
+  control value, in row order, has passed the model's turning point, with a linear ramp one row
+  spacing wide so that χ² stays continuous (:meth:`CurveModel.attached_weight`).  Where pull-off
+  happened is then weighed by the likelihood, not found by a threshold on the data: at 4 % force
+  noise the jump is only 3–4 row-to-row noise steps high and a 6-σ detector missed it in 14 of 15
+  curves, which biased W_ad by -30 % (DESIGN.md B4).
+* With a **fixed split** (``fixed_split=True``: the rows of ``segments``) the rows before the jump are
+  attached; one beyond the model's turning point is given the turning-point force (a clamp that keeps
+  the residual continuous), and the measured pull-off position enters as one more residual
+  (:attr:`CurveModel.jump`, σ = spacing/√12: the jump happened somewhere between two rows).  The fit
+  uses it as a second stage, at the row the free split found (:mod:`.lsq`): the free split's ramp
+  would place pull-off to a fraction of a row when the jump is large against the noise.
 
-Where the jump happened is itself a measurement of the model's turning point: it lies between the
-last attached row and the first detached row (:attr:`CurveModel.jump`).  The fit adds it as one
-more residual (see :mod:`.lsq`).  Without it the pull-off position would only enter through the
-clamp, and a model that detaches later than the data would cost nothing: under pressure control on a
-flat substrate, where delamination is unstable from its onset, W_ad would then be unidentifiable.
-
-The segments are found by **row order**, never by control value (rows just before and just after
-the jump may share a displacement): :func:`segment` finds the end of loading (``Curve.i_turn``) and the
-detachment jump (the largest rise of the force toward zero after the most negative force, kept
-only when it is large against the noise and the force after it is near zero).
+:func:`segment` still finds the end of loading (``Curve.i_turn``, by **row order**, never by control
+value: rows just before and just after the jump may share a displacement) and a detected jump (the
+largest rise of the force toward zero after the most negative force, kept only when it is large
+against the noise), which is now only a first guess for reports.
 
 For each parameter set one history is computed with :func:`adhfit.simulate` (``points`` rows), ending
 the loading at the data's largest control value, and the force is interpolated along its monotone
@@ -42,6 +44,7 @@ from scipy.interpolate import PchipInterpolator
 from ..errors import AdhfitError, InputError
 from ..simulation import simulate
 from .options import DEFAULT_POINTS
+from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
            "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS"]
@@ -53,105 +56,12 @@ OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offs
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
 #: succeed at a neighbouring one; the interpolants differ by ~1e-4 of the force, far below the noise)
 RETRY_POINTS = (0, 7, 19)
-#: a jump must exceed this fraction of the most negative force ...
-JUMP_FRACTION = 0.3
-#: ... and this many robust standard deviations of the row-to-row force changes
-JUMP_NOISE = 6.0
-
-
 class ModelDomainError(AdhfitError, ValueError):
     """The parameters leave the model's domain (the history cannot be computed)."""
 
     def __init__(self, message: str, params: dict) -> None:
         self.params = dict(params)
         super().__init__(f"{message} (at {', '.join(f'{k}={v:.6g}' for k, v in self.params.items())})")
-
-
-# ----------------------------------------------------------------------------------------------
-# segmentation of the measured rows
-
-
-@dataclass(frozen=True)
-class Segments:
-    """Row-order segments of a measured curve.
-
-    Attributes
-    ----------
-    n : int
-        Number of rows.
-    i_turn : int
-        Last loading row (largest control value, first occurrence).
-    i_jump : int or None
-        First row after the detachment jump (model force zero from here on); ``None`` when the data
-        end before pull-off.
-    jump : float
-        Size of the detected jump, N (0 when none).
-    """
-
-    n: int
-    i_turn: int
-    i_jump: int | None
-    jump: float = 0.0
-
-    def _mask(self, lo: int, hi: int) -> np.ndarray:
-        m = np.zeros(self.n, bool)
-        m[lo:hi] = True
-        return m
-
-    @property
-    def loading(self) -> np.ndarray:
-        """Boolean mask of the loading rows (the turning row included)."""
-        return self._mask(0, self.i_turn + 1)
-
-    @property
-    def attached(self) -> np.ndarray:
-        """Boolean mask of the unloading rows before the detachment jump."""
-        return self._mask(self.i_turn + 1, self.n if self.i_jump is None else self.i_jump)
-
-    @property
-    def detached(self) -> np.ndarray:
-        """Boolean mask of the rows after the jump (free membrane)."""
-        return self._mask(self.n if self.i_jump is None else self.i_jump, self.n)
-
-    def as_dict(self) -> dict:
-        return {"i_turn": self.i_turn, "i_jump": self.i_jump, "jump": self.jump,
-                "n_loading": int(self.loading.sum()), "n_attached": int(self.attached.sum()),
-                "n_detached": int(self.detached.sum())}
-
-
-def detect_jump(force: np.ndarray, i_turn: int) -> tuple[int | None, float]:
-    """First row after the detachment jump, and the jump's size (N).
-
-    The jump is the largest rise of the force between consecutive rows after the most negative force
-    of the unloading rows.  It is accepted only if it exceeds ``JUMP_FRACTION`` of that force and
-    ``JUMP_NOISE`` robust standard deviations (median absolute deviation) of the row-to-row changes,
-    and if the force after it is closer to zero than to the force before it.
-
-    Returns
-    -------
-    (i_jump, size) : (int or None, float)
-        ``(None, 0.0)`` when the data end before pull-off.
-    """
-    f = np.asarray(force, float)
-    i_min = i_turn + int(np.argmin(f[i_turn:]))
-    if f[i_min] >= 0.0 or i_min >= f.size - 1:
-        return None, 0.0
-    steps = np.diff(f[i_min:])
-    k = int(np.argmax(steps))
-    size = float(steps[k])
-    all_steps = np.diff(f[i_turn:])
-    noise = 1.4826 * float(np.median(np.abs(all_steps - np.median(all_steps))))
-    before, after = f[i_min + k], float(np.median(f[i_min + k + 1:]))
-    if size > JUMP_FRACTION * abs(f[i_min]) and size > JUMP_NOISE * noise \
-            and abs(after) < 0.5 * abs(before):
-        return i_min + k + 1, size
-    return None, 0.0
-
-
-def segment(curve) -> Segments:
-    """Segment a :class:`~adhfit.data.Curve` by row order (loading, attached, detached)."""
-    i_jump, size = detect_jump(curve.force, curve.i_turn)
-    return Segments(n=len(curve.x), i_turn=int(curve.i_turn), i_jump=i_jump, jump=size)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -268,7 +178,7 @@ class CurveModel:
     """
 
     def __init__(self, curve, scene, slip: str, *, points: int = DEFAULT_POINTS,
-                 segments: Segments | None = None) -> None:
+                 segments: Segments | None = None, fixed_split: bool = False) -> None:
         if slip not in ("no-slip", "frictionless"):
             raise InputError("slip", slip, "one of 'no-slip', 'frictionless'")
         if curve.control != scene.control:
@@ -280,7 +190,14 @@ class CurveModel:
         self.force = np.asarray(curve.force, float)
         self.x_max = float(self.x[self.segments.i_turn])
         self._loading = self.segments.loading
-        self._attached = self.segments.attached
+        self.fixed_split = bool(fixed_split)
+        # free split: every unloading row is attached or detached as the parameters say (see predict);
+        # fixed split: the rows of ``segments`` (attached ones clamped beyond the turning point)
+        self._attached = self.segments.attached if self.fixed_split else np.arange(self.x.size) > self.segments.i_turn
+        self._run_min = np.minimum.accumulate(self.x[self._attached]) if self._attached.any() else self.x[:0]
+        steps = np.abs(np.diff(self.x[self.segments.i_turn:]))
+        steps = steps[steps > 0]
+        self.spacing = float(np.median(steps)) if steps.size else 1e-9 * max(abs(self.x_max), 1e-30)
         self._cache: dict = {}
         self.n_histories = 0
         self.n_evaluations = 0
@@ -325,10 +242,10 @@ class CurveModel:
         self._cache[key] = pcs
         return pcs
 
-    def dimensionless_x(self, mu_h: float, x_offset: float) -> np.ndarray:
-        """The measured control values as δ/b or p (with the offset)."""
+    def dimensionless_x(self, mu_h: float, x_offset: float, x: np.ndarray | None = None) -> np.ndarray:
+        """The measured control values (or ``x``) as δ/b or p (with the offset)."""
         scales = self.scene.scales(float(mu_h))
-        shifted = self.x + x_offset
+        shifted = (self.x if x is None else x) + x_offset
         return scales.to_delta(shifted) if self.control == "displacement" else scales.to_p(shifted)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
@@ -357,18 +274,49 @@ class CurveModel:
         f = np.zeros(xd.shape)
         f[self._loading] = pcs.f_loading(xd[self._loading])
         f[self._attached] = pcs.f_unloading(xd[self._attached])
+        if not self.fixed_split:
+            f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
         return self.scene.scales(float(mu_h)).from_f(f) + force_offset
+
+    def attached_weight(self, mu_h: float, x_offset: float, pcs: Pieces) -> np.ndarray:
+        """Weight (0 detached .. 1 attached) of every unloading row, from the model's turning point.
+
+        A row is detached once the control value, in row order, has passed the model's turning point
+        (the running minimum of the unloading control values is below x_tp): the row split follows
+        from the parameters, not from a threshold on the data.  The switch is a linear ramp one row
+        spacing wide, centred on x_tp (the jump happened somewhere between two rows), so that χ² is
+        continuous in the parameters.
+        """
+        if self.fixed_split:
+            return np.ones(int(self._attached.sum()))
+        if not self._run_min.size:
+            return self._run_min
+        run = self.dimensionless_x(mu_h, x_offset, self._run_min)
+        h = abs(float(self.dimensionless_x(mu_h, x_offset, np.array([self.x_max]))[0]
+                      - self.dimensionless_x(mu_h, x_offset, np.array([self.x_max - self.spacing]))[0]))
+        return np.clip(0.5 + (run - pcs.x_tp) / max(h, 1e-300), 0.0, 1.0)
+
+    def split(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> int | None:
+        """First detached row for these parameters (weight below 1/2), ``None`` when the data end
+        before the model's pull-off."""
+        if self.fixed_split:
+            return self.segments.i_jump
+        pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
+        wt = self.attached_weight(mu_h, x_offset, pcs)
+        det = np.flatnonzero(wt < 0.5)
+        return int(self.segments.i_turn + 1 + det[0]) if det.size else None
 
     @property
     def jump(self) -> tuple[float, float] | None:
-        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units.
+        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units
+        (fixed split only: with a free split the rows themselves carry it).
 
         The jump happened between the last attached row and the first detached row: x_jump is their
         midpoint and σ_jump = |spacing|/sqrt(12), the standard deviation of a position known only to
         lie in that interval.  ``None`` when the data end before pull-off.
         """
         j = self.segments.i_jump
-        if j is None:
+        if j is None or not self.fixed_split:
             return None
         x_a, x_d = self.x[j - 1], self.x[j]
         return float(0.5 * (x_a + x_d)), max(abs(float(x_a - x_d)), 1e-12 * self.x_max) / math.sqrt(12.0)
@@ -387,6 +335,7 @@ class CurveModel:
         infinite there, so the Jacobian (and the covariance) is fragile (DESIGN.md B4)."""
         pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
         xd = self.dimensionless_x(mu_h, x_offset)[self._attached]
+        xd = xd[self.attached_weight(mu_h, x_offset, pcs) >= 0.5]
         if xd.size < 2:
             return False
         k = int(np.argmin(xd))
