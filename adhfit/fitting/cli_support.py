@@ -62,6 +62,13 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--points", type=_points, default=DEFAULT_POINTS, help="rows per computed history")
     p.add_argument("--no-profile", action="store_true", help="covariance intervals only (faster)")
     p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
+    p.add_argument("--global", dest="global_fit", action="store_true",
+                   help="several curves of one membrane and substrate: one W_ad, one mu*h and one slip condition, "
+                        "offsets per curve, each curve its own scene (DESIGN.md A7)")
+    p.add_argument("--sigma-radius", default=None, metavar="LENGTH",
+                   help="with --global: contact-radius noise, e.g. '2 um' (default: estimated per curve)")
+    p.add_argument("--no-contact-radius", action="store_true",
+                   help="with --global: do not fit the contact_radius column")
     p.set_defaults(run=run_fit)
     return p
 
@@ -86,6 +93,9 @@ def run_fit(args) -> int:
     from ..units import parse_quantity  # noqa: PLC0415
     from .fit import fit_curve  # noqa: PLC0415
     from . import batch  # noqa: PLC0415
+    if getattr(args, "global_fit", False):
+        from .global_cli import run_global  # noqa: PLC0415
+        return run_global(args)
     if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
         if batch.is_batch(args.data):
             return batch.run_batch(args, run_fit)
