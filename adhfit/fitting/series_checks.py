@@ -9,7 +9,8 @@ What a reviewer asks of a series fit, per curve:
 * **its pull on the shared values**: the leave-one-out shift of ln W_ad and ln μh, from one
   Gauss–Newton step of the fit without the curve (J_{-k}ᵀJ_{-k})⁻¹ J_kᵀ r_k at the optimum, given in
   units of the joint standard errors; and the Hausman statistic Δᵀ(C_{-k} - C)⁻¹Δ, which is χ²(2) when
-  the curve agrees with the others.  Flagged when its p-value is below :data:`PULL_P` (0.1 %);
+  the curve agrees with the others.  Flagged when its p-value is below :data:`PULL_P` (0.1 %); with
+  three or more curves only on the most discordant curve (:func:`_pull_flags`);
 * what the curve contributes: the standard errors of the shared values without it, and its own
   single-curve estimates.
 """
@@ -70,29 +71,55 @@ def _jacobian(residual, params) -> tuple[np.ndarray, list[str], np.ndarray]:
     return jac, names, r0
 
 
+def _reference_weights(sf, n: int) -> np.ndarray:
+    """Per residual row: σ_fitted/σ_reference of its block (the reference is the row-to-row noise or
+    the given σ), so that a curve the shared values cannot follow keeps its true weight (its fitted σ
+    has grown to absorb the misfit)."""
+    w = np.ones(n)
+    for k, (m, row) in enumerate(zip(sf.members, curve_rows(sf))):
+        lo = sf._start(k)
+        nf = m.model.force.size + (m.model.jump is not None)
+        w[lo:lo + nf] = m.sigma_f / row["noise_reference"]
+        if m.radius is not None:
+            ref = m.sigma_a if sf.given["contact_radius"] else (noise_estimate(m.radius.values) or m.sigma_a)
+            w[lo + nf:lo + nf + m.radius.rows.size] = m.sigma_a / ref
+    return w
+
+
+def _gn(jac, r, rows, cols):
+    """Gauss–Newton step and covariance over ``cols`` from the residual rows ``rows``."""
+    j = jac[np.ix_(rows, cols)]
+    cov = np.linalg.pinv(j.T @ j)
+    return -cov @ (j.T @ r[rows]), cov
+
+
 def leave_one_out(sf) -> list[dict]:
     """Per curve: shift of the shared ln W_ad, ln μh without it (in joint standard errors), their
-    standard errors without it, and the Hausman χ²(2) statistic with its p-value."""
+    standard errors without it, and the Hausman χ²(2) statistic Δᵀ(C_{-k} - C)⁻¹Δ with its p-value.
+
+    Linearised at the optimum, with every block weighted by its reference noise
+    (:func:`_reference_weights`): Δ is the difference of the Gauss–Newton steps with and without the
+    curve's rows (and its offsets)."""
     jac, names, r = _jacobian(sf.residual, sf.best.params)
+    w = _reference_weights(sf, r.size)
+    jac, r = jac * w[:, None], r * w
     shared = [names.index("ln_work_of_adhesion"), names.index("ln_mu_h")]
-    full = np.linalg.pinv(jac.T @ jac)
-    c_full = full[np.ix_(shared, shared)]
+    everything = np.ones(r.size, bool)
+    step_full, cov_full = _gn(jac, r, everything, list(range(len(names))))
+    c_full = cov_full[np.ix_(shared, shared)]
     se = np.sqrt(np.diag(c_full))
     out = []
     for k, m in enumerate(sf.members):
         lo = sf._start(k)
         n_k = m.model.force.size + (m.model.jump is not None) + (0 if m.radius is None else m.radius.rows.size)
-        rows = np.zeros(r.size, bool)
-        rows[lo:lo + n_k] = True
+        rows = everything.copy()
+        rows[lo:lo + n_k] = False
         cols = [i for i, n in enumerate(names) if n.startswith("ln_") or n.rsplit("_", 1)[-1] != str(k)]
-        jr = jac[np.ix_(~rows, cols)]
-        c_without = np.linalg.pinv(jr.T @ jr)
-        step = c_without @ (jac[np.ix_(rows, cols)].T @ r[rows])
+        step, cov = _gn(jac, r, rows, cols)
         s_idx = [cols.index(i) for i in shared]
-        delta = step[s_idx]
-        c_w = c_without[np.ix_(s_idx, s_idx)]
-        v = c_w - c_full
-        stat = float(delta @ np.linalg.pinv(v) @ delta)
+        delta = step[s_idx] - step_full[shared]
+        c_w = cov[np.ix_(s_idx, s_idx)]
+        stat = float(delta @ np.linalg.pinv(c_w - c_full) @ delta)
         out.append({"shift_in_stderr": {"work_of_adhesion": float(delta[0] / se[0]), "mu_h": float(delta[1] / se[1])},
                     "stderr_without": {"work_of_adhesion": float(math.sqrt(max(c_w[0, 0], 0.0))),
                                        "mu_h": float(math.sqrt(max(c_w[1, 1], 0.0)))},
@@ -138,7 +165,20 @@ def _curve_entries(sf, singles, loo) -> list[dict]:
                                    "redchi": row["redchi_contact_radius"]}
         e["flags"] = _flags(e)
         out.append(e)
+    _pull_flags(out)
     return out
+
+
+def _pull_flags(entries: list[dict]) -> None:
+    """Flag the pull: with three or more curves only the most discordant one (leaving out a good curve
+    leaves the odd one in, so the good curves' pulls are large too); with two curves, both (which
+    one is odd cannot be told)."""
+    p = [e["leave_one_out"]["p_value"] for e in entries]
+    if min(p) >= PULL_P:
+        return
+    worst = [int(np.argmin(p))] if len(entries) > 2 else list(range(len(entries)))
+    for k in worst:
+        entries[k]["flags"].append("pull")
 
 
 def _flags(e: dict) -> list[str]:
@@ -147,8 +187,6 @@ def _flags(e: dict) -> list[str]:
         out.append("redchi")
     if e["contact_radius"] and e["contact_radius"]["redchi"] > REDCHI_FLAG:
         out.append("redchi_contact_radius")
-    if e["leave_one_out"]["p_value"] < PULL_P:
-        out.append("pull")
     return out
 
 
