@@ -84,9 +84,9 @@ def _warnings(scene, fits, verdict, curve, reported) -> tuple[list[str], list[st
     out += list(rep.warnings)
     diag = [f"[{s}] {d}" for s, f in fits.items() for d in f.diagnostics]
     if verdict["selected"] is None and len(fits) > 1:
-        out.append(f"The data cannot decide between no-slip and frictionless contact ({verdict['explanation'].rstrip('.')}); "
-                   f"the estimates are the {verdict['favoured']} fit's, and their 95 % intervals cover both "
-                   f"conditions' intervals.")
+        out.append(f"The slip condition is undecided: the data cannot tell no-slip from frictionless contact "
+                   f"for sure ({verdict['explanation'].rstrip('.')}). The estimates are the {verdict['favoured']} "
+                   f"fit's, and their 95 % intervals cover both conditions' intervals.")
     w_e, mu_e = rep.parameters["work_of_adhesion"], rep.parameters["mu_h"]
     from ..params import DIMENSIONLESS  # noqa: PLC0415
     if w_e.value and mu_e.value and w_e.value / mu_e.value > _W_EDGE * DIMENSIONLESS["w"].upper:

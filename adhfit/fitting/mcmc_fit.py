@@ -24,7 +24,7 @@ import numpy as np
 
 from .diagnostics import diagnose
 from .evidence import StudentT, importance_evidence, model_probabilities
-from .fit import _check_options, _inputs, _provenance
+from .fit import _check_options, _inputs, _provenance, _segments
 from .lsq import fit_slip
 from .mcmc import ParallelMap, default_workers, sample_posterior
 from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
@@ -70,18 +70,46 @@ class McmcFitResult(FitResult):
         d = super().as_dict()
         d.update(clean({"seed": self.mcmc.get("seed"), "converged": self.converged,
                         "model_probabilities": self.mcmc.get("model_probabilities", {}).get("probabilities"),
-                        "diagnostics": {s: v["diagnostics"] for s, v in self.mcmc.get("slips", {}).items()},
+                        # the sampler's diagnostics per slip condition (kept), plus the solver notes list
+                        "diagnostics": {s: v["diagnostics"] for s, v in self.mcmc.get("slips", {}).items()}
+                        | {"notes": list(self.diagnostics)},
                         "mcmc": dict(self.mcmc)}))
         return d
 
 
-def _estimates(samples: np.ndarray, names: list[str], lsq: Mapping[str, Estimate]) -> dict[str, Estimate]:
+#: a posterior percentile within this fraction of the prior's range from its edge is prior-limited
+PRIOR_EDGE = 0.05
+
+
+def _edge(col: np.ndarray, prior) -> tuple[bool, bool]:
+    """(at lower edge, at upper edge): whether the 2.5 / 97.5 percentiles reach the prior's bounds, so
+    that the data bound the parameter from one side only (DESIGN.md A5b)."""
+    if prior is None or prior.dist == "normal":
+        return False, False
+    f = (np.log if prior.log else (lambda v: v))
+    lo, hi = float(f(prior.a)), float(f(prior.b))
+    vals = f(col) if prior.log else col
+    p_lo, p_hi = np.percentile(vals, [2.5, 97.5])
+    span = hi - lo
+    return bool(p_lo < lo + PRIOR_EDGE * span), bool(p_hi > hi - PRIOR_EDGE * span)
+
+
+def _estimates(samples: np.ndarray, names: list[str], lsq: Mapping[str, Estimate],
+               priors: list | None = None) -> dict[str, Estimate]:
     out = {}
     for k, name in enumerate(names):
         col = samples[:, k]
         lo, med, hi = np.percentile(col, [2.5, 50.0, 97.5])
-        out[name] = Estimate(name, float(med), float(np.std(col, ddof=1)), (float(lo), float(hi)), CI_METHOD,
-                             lsq[name].ci95 if name in lsq else None)
+        at_lo, at_hi = _edge(col, priors[k] if priors else None)
+        ci, status = (float(lo), float(hi)), "determined"
+        if at_lo and at_hi:
+            ci, status = None, "undetermined"
+        elif at_hi:  # one-sided 95 %: the 5th percentile
+            ci, status = (float(np.percentile(col, 5.0)), None), "lower_bound"
+        elif at_lo:
+            ci, status = (None, float(np.percentile(col, 95.0))), "upper_bound"
+        out[name] = Estimate(name, float(med), float(np.std(col, ddof=1)), ci, CI_METHOD,
+                             lsq[name].ci95 if name in lsq else None, status)
     return out
 
 
@@ -149,7 +177,7 @@ def _verdict(probs: dict, lsq_verdict: dict) -> dict:
 
 
 def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
-                   fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
+                   fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
                    points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
                    progress: bool | None = None, **settings) -> McmcFitResult:
     """Bayesian fit of W_ad, μh (and offsets) under each slip condition, and the slip condition's probability.
@@ -229,14 +257,15 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         rng = np.random.default_rng(root.spawn(len(slips) + 1)[-1])
         rep = verdict["parameters_from"]
         fits = {s: dataclasses.replace(lsq_fits[s], parameters=_estimates(samples[s], targets[s].names,
-                                                                          lsq_fits[s].parameters),
-                                       warnings=tuple(lsq_fits[s].warnings) + tuple(diags[s]["warnings"]),
+                                                                          lsq_fits[s].parameters,
+                                                                          targets[s].priors),
+                                       diagnostics=tuple(lsq_fits[s].diagnostics) + tuple(diags[s]["warnings"]),
                                        raw=chains[s]) for s in slips}
         if verdict["selected"] is None and len(slips) > 1:
             mixed = _mixture(samples, probs["probabilities"], rng)
             reported = {k: dataclasses.replace(e, ci_method=CI_METHOD + ", averaged over both slip conditions "
                                                 "(weights = model probabilities)")
-                        for k, e in _estimates(mixed, targets[rep].names, {}).items()}
+                        for k, e in _estimates(mixed, targets[rep].names, {}, targets[rep].priors).items()}
         else:
             reported = dict(fits[rep].parameters)
         band = _band(pmap, targets[rep], chains[rep].flat, lsq_fits[rep].sigma, cfg["predictive_draws"], rng)
@@ -248,15 +277,16 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     if not converged:
         warn.append("MCMC NOT CONVERGED for: " + ", ".join(s for s, d in diags.items() if not d["converged"])
                     + " — do not trust these intervals (see the diagnostics)")
-    for s in slips:
-        warn += [f"[{s}] {w}" for w in fits[s].warnings]
+    warn += list(fits[rep].warnings)
+    diagnostics = [f"[{s}] {d}" for s in slips for d in fits[s].diagnostics]
     if path is not None and not any(c.groups for c in chains.values()):
         warn.append("the chains were not saved (emcee's HDF5 backend needs h5py, which is not installed)")
     if not probs["reliable"]:
         warn.append("the evidence estimate is unreliable (few effective importance weights)")
     if verdict["selected"] is None and len(slips) > 1:
-        warn.append(f"slip condition undecided ({verdict['explanation']}); the estimates average both "
-                    f"conditions' posteriors, weighted by their probabilities")
+        warn.append(f"The slip condition is undecided: the data cannot tell no-slip from frictionless contact "
+                    f"for sure ({verdict['explanation'].rstrip('.')}). The estimates average both conditions' "
+                    f"posteriors, weighted by their probabilities.")
     mc_time = sum(c.wall_time for c in chains.values())
     mc_evals = sum(c.n_evaluations for c in chains.values())
     summary = {
@@ -284,8 +314,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         n_excluded=len(curve.excluded), sigma=rep_fit.sigma,
         sigma_source="given" if sigma is not None else "integrated out (prior ∝ 1/σ); the value shown is the "
                                                        "least-squares estimate",
-        warnings=tuple(warn), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
+        warnings=tuple(warn), diagnostics=tuple(diagnostics), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
         n_histories=sum(f.n_histories for f in lsq_fits.values()), wall_time=wall,
-        provenance=_provenance(curve, scene, seed, "mcmc", options), segments=seg.as_dict(),
+        provenance=_provenance(curve, scene, seed, "mcmc", options), segments=_segments(seg, lsq_fits[rep]),
         excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), mcmc=summary,
         samples=samples, predictive=band)
