@@ -45,6 +45,9 @@ __all__ = ["fit_global", "SeriesFit"]
 #: stop re-estimating the noise levels when none moves by more than this fraction
 SIGMA_RTOL = 0.02
 MAX_REWEIGHT = 4
+#: least noise level, as a fraction of the largest force (or contact radius): noise-free data must not
+#: get an unbounded weight
+SIGMA_FLOOR = 1e-5
 _LN = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h"}
 
 
@@ -160,11 +163,11 @@ def _reweight(members, best, given) -> bool:
         if not given["force"] and rf.size > k + 1:
             new = m.sigma_f * math.sqrt(float(rf @ rf) / (rf.size - k))
             moved |= abs(new / m.sigma_f - 1.0) > SIGMA_RTOL
-            m.sigma_f = max(new, 1e-300)
+            m.sigma_f = max(new, SIGMA_FLOOR * m.par.f_scale)
         if m.radius is not None and not given["contact_radius"] and ra.size > 1:
             new = m.sigma_a * math.sqrt(float(ra @ ra) / ra.size)
             moved |= abs(new / m.sigma_a - 1.0) > SIGMA_RTOL
-            m.sigma_a = max(new, 1e-300)
+            m.sigma_a = max(new, SIGMA_FLOOR * float(np.max(m.radius.values)))
     return moved
 
 
