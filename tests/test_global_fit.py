@@ -165,3 +165,11 @@ def test_series_recovery_study():
         assert sum(r[name]["covered"] for r in with_radius) >= 10
     pairs = zip(rows[0::2], rows[1::2])
     assert all(a["work_of_adhesion"]["rel_width"] <= b["work_of_adhesion"]["rel_width"] * 1.05 for a, b in pairs)
+
+
+def test_cli_global_needs_two_curves(tmp_path, capsys):
+    from adhfit.cli import main
+    _write(_series(5, radius_noise=None, pressures=(1200.0,), rows=60), tmp_path)
+    assert main(["fit", str(tmp_path / "p1200" / "curve.csv"), "--global", "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "two or more curves for --global" in err and err.count("\n") == 1

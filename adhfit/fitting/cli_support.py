@@ -67,7 +67,7 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
     p.add_argument("--global", dest="global_fit", action="store_true",
                    help="several curves of one membrane and substrate: one W_ad, one mu*h and one slip condition, "
-                        "offsets per curve, each curve its own scene (DESIGN.md A7)")
+                        "offsets per curve (the load-cell zero always fitted), each curve its own scene (DESIGN.md A7)")
     p.add_argument("--sigma-radius", default=None, metavar="LENGTH",
                    help="with --global: contact-radius noise, e.g. '2 um' (default: estimated per curve)")
     p.add_argument("--no-contact-radius", action="store_true",

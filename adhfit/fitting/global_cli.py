@@ -47,7 +47,9 @@ def run_global(args) -> int:
         parse_quantity(args.sigma_radius, "length", name="--sigma-radius")
     controls = {sc.control for sc in scenes}
     fit_x = _x_offset(args, scenes[0].control) if len(controls) == 1 else None
-    result = fit_global(curves, scenes, slip=args.slip or "auto", sigma=sigma, sigma_contact_radius=sigma_a,
+    slips = {sc.slip for sc in scenes}
+    slip = args.slip or (slips.pop() if len(slips) == 1 else "auto")
+    result = fit_global(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_a,
                         contact_radius=not getattr(args, "no_contact_radius", False), fit_x_offset=fit_x,
                         fit_force_offset=True, seed=args.seed, points=args.points, profile=not args.no_profile)
     out = args.output if args.output is not None else Path("adhfit_global_fit")
