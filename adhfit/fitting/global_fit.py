@@ -35,8 +35,8 @@ from .profile import one_side, profile_interval
 from .residual_checks import correlation_factor, widen
 from .result import Estimate, FitResult, SlipFit
 from .selection import compare
-from .series import (Member, SeriesParametrisation, noise_floor, radius_data, series_residual,
-                     split_blocks)
+from .series import (Member, SeriesParametrisation, noise_floor, radius_data, radius_prediction,
+                     series_residual, split_blocks)
 from .starts import noise_estimate
 from .summary import Z95, _from_profile, summarize
 
@@ -178,8 +178,15 @@ def _fixed(curve, scene, slip, points, seg, j):
 
 
 def _block_cost(m, sub) -> float:
+    """χ² of one curve (force rows, pull-off term, contact radius) at internal values ``sub``."""
     r = m.force_residual()(sub)
-    return float(r @ r)
+    cost = float(r @ r)
+    if m.radius is not None:
+        si = m.par.si(sub)
+        a = radius_prediction(m.model, si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+        ra = (m.radius.values - a[m.radius.rows]) / m.sigma_a
+        cost += float(ra @ ra)
+    return cost
 
 
 def _check_splits(members, curves, scenes, segs, slip, points, spar, params) -> bool:
@@ -207,7 +214,7 @@ def _check_splits(members, curves, scenes, segs, slip, points, spar, params) -> 
             if segs[i].i_turn + 1 < jj < free.x.size - 1 and jj != now:
                 cands.append(_fixed(curves[i], scenes[i], slip, points, segs[i], jj))
         for model in cands:
-            trial = Member(model=model, par=m.par, sigma_f=m.sigma_f)
+            trial = Member(model=model, par=m.par, sigma_f=m.sigma_f, radius=m.radius, sigma_a=m.sigma_a)
             try:
                 cost = _block_cost(trial, sub)
             except ModelDomainError:
