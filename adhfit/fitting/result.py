@@ -321,6 +321,9 @@ class FitResult:
 
         Returns the main axes.  Draws from stored predictions: never re-runs a fit.
         """
+        if self.curves:  # a global fit: every curve, the shared fit, residuals (returns the figure)
+            from ..report.series_plot import plot_series  # noqa: PLC0415
+            return plot_series(self, **kwargs)
         from ..report.fit_plot import plot_fit  # noqa: PLC0415 - matplotlib lives in adhfit.report
         return plot_fit(self, ax=ax, **kwargs)
 
