@@ -11,7 +11,6 @@ curves with the contact radius), so 2 % is > 6 standard errors: a miss means a b
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np

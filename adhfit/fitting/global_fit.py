@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -371,6 +370,3 @@ def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma
                              "fit_force_offset": fit_force_offset, "points": points, "profile": profile},
                     seed=seed, t0=t0)
 
-
-def _paths(curves) -> list[str]:
-    return [str(c) if isinstance(c, (str, Path)) else str(getattr(c, "path", "")) for c in curves]
