@@ -115,6 +115,13 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="batch: fit the curves on the Dask distributed cluster at ADDRESS, e.g. "
                         "tcp://10.0.0.5:8786 (pip install 'adhfit[dask]'; files on a shared disk)")
+    p.add_argument("--global", dest="global_fit", action="store_true",
+                   help="several curves of one membrane and substrate: one W_ad, one mu*h and one slip condition, "
+                        "offsets per curve (the load-cell zero always fitted), each curve its own scene (docs/contracts.md A7)")
+    p.add_argument("--sigma-radius", default=None, metavar="LENGTH",
+                   help="with --global: contact-radius noise, e.g. '2 um' (default: estimated per curve)")
+    p.add_argument("--no-contact-radius", action="store_true",
+                   help="with --global: do not fit the contact_radius column")
     p.set_defaults(run=run_fit)
     return p
 
@@ -169,6 +176,9 @@ def _force_offset(args) -> bool:
 
 def run_fit(args) -> int:
     """Run ``adhfit fit`` from parsed arguments; returns the exit status."""
+    if getattr(args, "global_fit", False):  # several curves, one fit: never the batch path
+        from .global_cli import run_global  # noqa: PLC0415
+        return run_global(args)
     from . import batch  # noqa: PLC0415
     if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
         if batch.is_batch(args.data):  # before the heavy imports: the workers may do all the fitting

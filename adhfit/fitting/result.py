@@ -47,6 +47,17 @@ def _readonly(a) -> np.ndarray:
     return arr
 
 
+def _per_curve_offsets(curves) -> dict:
+    """``offsets`` of a global fit: each offset's values per curve (in ``curves`` order), SI."""
+    out: dict = {}
+    for i, c in enumerate(curves):
+        for short, o in c["offsets"].items():
+            e = out.setdefault(short, {"status": "per_curve", "unit": o.get("unit"), "values": [None] * len(curves),
+                                       "stderr": [None] * len(curves), "fitted": "note" not in o})
+            e["values"][i], e["stderr"][i] = o.get("value"), o.get("stderr")
+    return out
+
+
 @dataclass(frozen=True)
 class Estimate:
     """One fitted parameter in SI.
@@ -229,6 +240,9 @@ class FitResult:
         ``membrane`` and ``why`` (one sentence).
     observables : tuple of str
         The columns the fit used.
+    curves : tuple of dict
+        A global fit's curves (DESIGN.md A7: ``file``, ``offsets``, ``redchi``, ``n_points`` and the
+        per-curve checks); empty for a single curve.
     """
 
     method: str
@@ -251,6 +265,7 @@ class FitResult:
     diagnostics: tuple[str, ...] = ()
     model: Mapping[str, Any] = field(default_factory=lambda: dict(MODEL))
     observables: tuple[str, ...] = ("force",)
+    curves: tuple = ()
 
     def __post_init__(self) -> None:
         for key in ("slip", "parameters", "fits", "provenance", "segments", "raw", "model"):
@@ -274,6 +289,8 @@ class FitResult:
     def offsets_report(self) -> dict:
         """``offsets`` of report.json (DESIGN.md A5b): every fitted offset in SI under its short name
         (``force``, ``displacement``, ``pressure``), ``force`` always present (0.0 with a note when fixed)."""
+        if self.curves:  # a global fit: offsets per curve
+            return _per_curve_offsets(self.curves)
         out = {}
         for k, e in self.offsets.items():
             out[k.removesuffix("_offset")] = e.as_dict() | {"fitted": True}
@@ -297,13 +314,16 @@ class FitResult:
             "sigma": self.sigma, "sigma_source": self.sigma_source, "segments": dict(self.segments),
             "warnings": list(self.warnings), "model_evaluations": self.n_evaluations,
             "histories": self.n_histories, "wall_time_s": self.wall_time,
-            "provenance": dict(self.provenance)})
+            "provenance": dict(self.provenance)} | ({"curves": list(self.curves)} if self.curves else {}))
 
     def plot(self, ax=None, **kwargs):
         """Data, both fitted curves and residuals (see :func:`adhfit.report.fit_plot.plot_fit`).
 
         Returns the main axes.  Draws from stored predictions: never re-runs a fit.
         """
+        if self.curves:  # a global fit: every curve, the shared fit, residuals (returns the figure)
+            from ..report.series_plot import plot_series  # noqa: PLC0415
+            return plot_series(self, **kwargs)
         from ..report.fit_plot import plot_fit  # noqa: PLC0415 - matplotlib lives in adhfit.report
         return plot_fit(self, ax=ax, **kwargs)
 
