@@ -59,7 +59,8 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
     memo["J"] = None if np.isnan(J[0, 0]) else J
     memo["shots"] = memo.get("shots", 0) + int(shots)
     if status != N.OK:
-        raise ConvergenceError("exact membrane: " + _WHY[status], {**fixed, **targets, "lambda0": cfg.lambda0})
+        raise ConvergenceError("exact membrane: " + _WHY[status],
+                               {**fixed, **targets, "lambda0": cfg.lambda0})
     vals[unk] = x
     r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = (float(q) for q in o)
     p, lc, rho_a, alpha = (float(q) for q in vals[:4])
