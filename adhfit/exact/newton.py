@@ -132,6 +132,20 @@ def _line_search(edge, crv, beta, n, vals, unk, res, tg, x, dx, nrm, cache):
 
 
 @njit(cache=True, error_model="numpy")
+def newton_packed(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
+    """``newton`` with its results in one array (status, shots, x[k], out[N_OUT], J[k*k]): one array
+    to hand back to Python instead of three."""
+    status, x, o, J, shots = newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter)
+    k = x.shape[0]
+    out = np.empty(2 + k + K.N_OUT + J.size)
+    out[0], out[1] = status, shots
+    out[2:2 + k] = x
+    out[2 + k:2 + k + K.N_OUT] = o
+    out[2 + k + K.N_OUT:] = J.ravel()
+    return out
+
+
+@njit(cache=True, error_model="numpy")
 def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     """Solve the residuals for the unknowns from ``x0``; ``J0`` a Jacobian to start from (NaN: none).
 

@@ -44,24 +44,29 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
         No convergence, or the iterate left the domain (non-finite shot).
     """
     memo = {} if memo is None else memo
-    vals = np.array([float(fixed.get(k, 0.0) if fixed.get(k) is not None else 0.0) for k in _KEYS])
-    if edge == "given" and fixed.get("l1p") is None and "l1p" not in unknowns:
-        vals[4] = np.nan
-    unk = np.array([_KEYS.index(k) for k in unknowns], dtype=np.int64)
-    res = np.array([_RES[r] for r in residuals], dtype=np.int64)
-    tg = np.array([targets.get("a", 0.0), targets.get("d", 0.0), targets.get("w", 0.0)], dtype=float)
-    x0 = np.asarray(x0, dtype=float)
+    vals = [fixed.get(k) for k in _KEYS]
+    vals = np.array([0.0 if v is None else float(v) for v in vals])
+    codes = memo.get("codes")
+    if codes is None or codes[0] != (unknowns, residuals):
+        codes = ((unknowns, residuals), np.array([_KEYS.index(k) for k in unknowns], dtype=np.int64),
+                 np.array([_RES[r] for r in residuals], dtype=np.int64))
+        memo["codes"] = codes
+    _, unk, res = codes
+    tg = np.array([targets.get("a", 0.0), targets.get("d", 0.0), targets.get("w", 0.0)])
+    k = len(unknowns)
     J = memo.get("J")
-    if J is None or J.shape != (len(res), len(x0)):
-        J = np.full((len(res), len(x0)), np.nan)
-    status, x, o, J, shots = N.newton(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, x0, J, tol,
-                               max_iter)
+    if J is None or J.shape != (len(res), k):
+        J = np.full((len(res), k), np.nan)
+    out = N.newton_packed(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg,
+                          np.asarray(x0, dtype=float), J, tol, max_iter)
+    status = int(out[0])
+    J = out[2 + k + K.N_OUT:].reshape(len(res), k)
     memo["J"] = None if np.isnan(J[0, 0]) else J
-    memo["shots"] = memo.get("shots", 0) + int(shots)
+    memo["shots"] = memo.get("shots", 0) + int(out[1])
     if status != N.OK:
         raise ConvergenceError("exact membrane: " + _WHY[status],
                                {**fixed, **targets, "lambda0": cfg.lambda0})
-    vals[unk] = x
-    r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = (float(q) for q in o)
-    p, lc, rho_a, alpha = (float(q) for q in vals[:4])
+    vals[unk] = out[2:2 + k]
+    r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = out[2 + k:2 + k + K.N_OUT].tolist()
+    p, lc, rho_a, alpha = vals[:4].tolist()
     return State(lc, max(rho_a, 0.0), alpha, p, a, d, f, G, r_end, th, l1m, l1p_, l2, u, v)
