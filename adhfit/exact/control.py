@@ -135,9 +135,12 @@ def _free_at_gap(d, lambda0, n) -> State:
     if d == 0.0:
         return free_inflation(0.0, lambda0, n)
     sgn = 1.0 if d > 0 else -1.0
+    memo: dict = {}
 
-    def resid(q):
-        return sgn * free_inflation(sgn * q, lambda0, n).d - abs(d)
+    def resid(q):  # continuation in lc from the last evaluation (secant iterations, bracket fallback)
+        st = free_inflation(sgn * q, lambda0, n, memo.get("lc"), memo)
+        memo["lc"] = st.lc
+        return sgn * st.d - abs(d)
 
     hi = 0.5
     while True:

@@ -56,7 +56,8 @@ def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float
             lc = float(lc)
             st = State(lc, 0.0, 0.0, q, 0.0, float(y[1]), 0.0, 0.0, float(y[0]), float(y[2]), lc, lc, lc,
                        float(y[4]), float(y[5]))
-    if st is None:
+    if st is None or not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
+        # no guess, no quick convergence, or a root outside Case I: bracket from lambda0 upwards
         st = evaluate(cfg, q, _bracketed(resid, lambda0, p))
     if not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
         raise ConvergenceError("exact free inflation: no Case I state (theta > pi/2 at the clamp)",
