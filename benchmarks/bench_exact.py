@@ -9,9 +9,13 @@ error of the A2 summary (f_max, onset / f_min / turning_point: f, delta, p, a) a
   solution of tests/exact_reference.py to ~1e-12 on single states), and
 - the independent reference itself for the end-of-loading state (a, d, f at the engine's rho_a).
 
+With ``--baseline REV`` it also times the engine of git revision REV against this one in the same run
+(both in fresh subprocesses, alternating, on the four cases at lambda0 = 1.5 and the default n): median
+wall and CPU (process_time) per history, and the ratio before/after.
+
 Usage::
 
-    python benchmarks/bench_exact.py [--repeat 5]
+    python benchmarks/bench_exact.py [--repeat 5] [--baseline REV]
 
 Writes ``benchmarks/results/exact.md`` and ``exact.json``.  The machine is shared (2 cores): times are
 medians (and minima) of ``--repeat`` calls after a warm-up; load averages are recorded.
@@ -25,6 +29,7 @@ import platform
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -37,7 +42,7 @@ from tests import exact_reference as ref  # noqa: E402
 LAMBDA0 = 1.2
 CASES = [("displacement", "frictionless", {"p": 0.6}), ("displacement", "no-slip", {"p": 0.6}),
          ("pressure", "frictionless", {"d": 0.2}), ("pressure", "no-slip", {"d": 0.2})]
-STEPS = (8, 12, 16, 24, 32, 48)
+STEPS = (8, 12, 16, 24, 32)
 
 
 def _run(control, slip, kw, n):
@@ -53,7 +58,7 @@ def _flat(s):
 
 
 def _time(fn, repeat):
-    """Median wall time and least CPU time (process_time: what the history costs on an idle core)."""
+    """Median wall time, median and least CPU time (process_time: least = an idle core's cost)."""
     fn()
     ts, cpu = [], []
     for _ in range(repeat):
@@ -61,14 +66,75 @@ def _time(fn, repeat):
         fn()
         ts.append(time.perf_counter() - t)
         cpu.append(time.process_time() - c)
-    return statistics.median(ts), min(cpu)
+    return statistics.median(ts), statistics.median(cpu), min(cpu)
+
+
+_WORKER = """
+import json, statistics, sys, time
+from adhfit.exact.history import exact_history
+control, slip, kw, repeat = json.loads(sys.argv[1])
+run = lambda: exact_history(control, slip, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5, points=200, **kw)
+run()
+ts, cpu = [], []
+for _ in range(repeat):
+    t, c = time.perf_counter(), time.process_time()
+    s = run().summary
+    ts.append(time.perf_counter() - t)
+    cpu.append(time.process_time() - c)
+print(json.dumps({"wall": statistics.median(ts), "cpu": statistics.median(cpu), "cpu_min": min(cpu),
+                  "f_min": s["f_min"]["f"], "turn_delta": s["turning_point"]["delta"]}))
+"""
+
+
+def _worker(tree, case, repeat):
+    control, slip, kw = case
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run([sys.executable, "-c", _WORKER, json.dumps([control, slip, kw, repeat])], env=env,
+                         capture_output=True, text=True, check=True, cwd=tree)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def compare(rev, repeat, rounds=2):
+    """Engine at ``rev`` against this tree: per case, alternating subprocesses, medians over rounds."""
+    tmp = Path(tempfile.mkdtemp(prefix="bench_exact_"))
+    arch = subprocess.run(["git", "archive", rev, "adhfit"], cwd=ROOT, capture_output=True, check=True).stdout
+    subprocess.run(["tar", "xf", "-", "-C", str(tmp)], input=arch, check=True)
+    out = []
+    for case in [(c, s, {"p": 0.6} if c == "displacement" else {"d": 0.2}) for c, s, _ in CASES]:
+        res = {"old": [], "new": []}
+        for _ in range(rounds):
+            res["old"].append(_worker(tmp, case, repeat))
+            res["new"].append(_worker(ROOT, case, repeat))
+        row = {"control": case[0], "slip": case[1]}
+        for k in ("old", "new"):
+            row[k + "_cpu_ms"] = 1e3 * statistics.median(r["cpu"] for r in res[k])
+            row[k + "_wall_ms"] = 1e3 * statistics.median(r["wall"] for r in res[k])
+        row["cpu_ratio"] = row["old_cpu_ms"] / row["new_cpu_ms"]
+        row["summary_diff"] = max(abs(res["old"][0][q] - res["new"][0][q]) for q in ("f_min", "turn_delta"))
+        out.append(row)
+    return out
+
+
+def _compare_lines(rev, cmp):
+    lines = ["", f"## Before/after in the same run (lambda0 = 1.5, n = default, 200 rows; before = {rev})", "",
+             "Each engine in fresh subprocesses, alternating (2 rounds x --repeat histories after a warm-up); "
+             "medians. CPU = time.process_time of the history.", "",
+             "| control | slip | before CPU ms | after CPU ms | CPU ratio | before wall ms | after wall ms "
+             "| abs diff (f_min, turning delta) |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for r in cmp:
+        lines.append(f"| {r['control']} | {r['slip']} | {r['old_cpu_ms']:.1f} | {r['new_cpu_ms']:.1f} | "
+                     f"{r['cpu_ratio']:.2f} | {r['old_wall_ms']:.0f} | {r['new_wall_ms']:.0f} | "
+                     f"{r['summary_diff']:.1e} |")
+    return lines
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--baseline", default=None, help="git revision to time against (same run)")
     args = ap.parse_args()
     load0 = os.getloadavg()
+    cmp = compare(args.baseline, args.repeat) if args.baseline else None
     rows = []
     for control, slip, kw in CASES:
         best = _run(control, slip, kw, 128)
@@ -81,18 +147,22 @@ def main() -> None:
         else:
             ref_err = None
         for n in STEPS:
-            med, mn = _time(lambda: _run(control, slip, kw, n), args.repeat)
+            med, mc, mn = _time(lambda: _run(control, slip, kw, n), args.repeat)
             s = _flat(_run(control, slip, kw, n).summary)
             err = max(abs(s[k] - sb[k]) for k in sb)
-            rows.append({"control": control, "slip": slip, "n": n, "median_ms": 1e3 * med, "min_cpu_ms": 1e3 * mn,
+            rows.append({"control": control, "slip": slip, "n": n, "median_ms": 1e3 * med,
+                         "median_cpu_ms": 1e3 * mc, "min_cpu_ms": 1e3 * mn,
                          "max_abs_err_vs_n128": err, "loading_end_err_vs_reference": ref_err})
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
-    meta = {"command": "python benchmarks/bench_exact.py --repeat %d" % args.repeat, "commit": commit,
+    cmd = "python benchmarks/bench_exact.py --repeat %d" % args.repeat
+    if args.baseline:
+        cmd += " --baseline " + args.baseline
+    meta = {"command": cmd, "commit": commit,
             "python": platform.python_version(), "nproc": os.cpu_count(), "load_start": load0,
             "load_end": os.getloadavg(), "lambda0": LAMBDA0}
     out = ROOT / "benchmarks" / "results"
-    (out / "exact.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))
+    (out / "exact.json").write_text(json.dumps({"meta": meta, "rows": rows, "compare": cmp}, indent=1))
     lines = ["# Exact membrane: run time against error (200-row histories, lambda0 = 1.2)", "",
              f"Command: `{meta['command']}` at {commit}; python {meta['python']}, nproc {meta['nproc']}, "
              f"load average at start {load0[0]:.2f}, at end {meta['load_end'][0]:.2f}.", "",
@@ -102,12 +172,15 @@ def main() -> None:
              "state (a, d, f) of the n = 128 run against the independent adaptive reference. "
              "The wall times are inflated by the shared machine's load; the least CPU time "
              "(process_time) is what a history costs on an idle core. Issue 11's target is 5 ms.", "",
-             "| control | slip | n | median wall ms | least CPU ms | max abs err (summary) | loading end vs reference |",
-             "|---|---|---:|---:|---:|---:|---:|"]
+             "| control | slip | n | median wall ms | median CPU ms | least CPU ms | max abs err (summary) | loading end vs reference |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         ref_s = "—" if r["loading_end_err_vs_reference"] is None else f"{r['loading_end_err_vs_reference']:.1e}"
-        lines.append(f"| {r['control']} | {r['slip']} | {r['n']} | {r['median_ms']:.0f} | {r['min_cpu_ms']:.0f} | "
+        lines.append(f"| {r['control']} | {r['slip']} | {r['n']} | {r['median_ms']:.0f} | {r['median_cpu_ms']:.1f} | "
+                     f"{r['min_cpu_ms']:.1f} | "
                      f"{r['max_abs_err_vs_n128']:.1e} | {ref_s} |")
+    if cmp:
+        lines += _compare_lines(args.baseline, cmp)
     (out / "exact.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

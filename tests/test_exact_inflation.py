@@ -29,6 +29,19 @@ def test_free_inflation_matches_reference(p, lambda0):
     assert free_inflation(p, lambda0).d == pytest.approx(math.copysign(d0_ref, p), abs=1e-7)  # default n
 
 
+@pytest.mark.parametrize("guess", [1.68, 1.05, 10.0])  # near; far (secant fails: bracketing)
+def test_free_inflation_from_a_guess_against_reference(guess):
+    """Continuation (compiled secant iterations from a guess, bracketing when they fail or land
+    outside Case I) finds the reference's Case I state from near and far guesses."""
+    d0_ref, lc_ref = ref.free_inflation(0.6, 1.5)
+    memo: dict = {}
+    for _ in range(2):  # the second call starts from the slope the first one left in memo
+        st = free_inflation(0.6, 1.5, n=64, lc_guess=guess, memo=memo)
+        assert st.lc == pytest.approx(lc_ref, rel=1e-9)
+        assert st.d == pytest.approx(d0_ref, abs=1e-9)
+        assert st.theta_end < 0.5 * math.pi
+
+
 def test_free_inflation_design_numbers():
     # DESIGN.md B5: (approximation - exact)/exact of the apex deflection at p = 0.6
     expected = {1.1: -0.33, 1.3: -0.15, 1.5: -0.067, 2.0: -0.012, 3.0: -0.001}

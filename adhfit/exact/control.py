@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from scipy.optimize import brentq
 
@@ -31,7 +31,8 @@ class Control:
     n_mc: int = 0
     n_pin: int = 0
     n_del: int = 0
-    _lc: float | None = None  # apex stretch of the last d0(p), for continuation
+    _seen: list = field(default_factory=list)  # (|p|, apex stretch) of the last d0(p): continuation
+    _memo: dict = field(default_factory=dict)  # slope of the free-inflation secant iterations
     end: tuple = ("a_max", None)  # the loading end as given
 
     @property
@@ -43,11 +44,27 @@ class Control:
         if self.control == "displacement":
             return self.free.d - st.d
         try:
-            fi = free_inflation(st.p, self.lambda0, self.n, self._lc)
-            self._lc = fi.lc
+            fi = free_inflation(st.p, self.lambda0, self.n, self._guess(abs(st.p)), self._memo)
+            self._seen = (self._seen + [(abs(st.p), fi.lc)])[-3:]
             return fi.d - st.d
         except ConvergenceError:
             return math.nan
+
+    def _guess(self, q: float) -> float | None:
+        """Apex stretch of free inflation at |p| = q, extrapolated from the last (up to 3) solved."""
+        pts = [pt for pt in self._seen if pt[0] != q] or self._seen
+        if not pts:
+            return None
+        if len({pt[0] for pt in pts}) < len(pts) or len(pts) == 1:
+            return pts[-1][1]
+        out = 0.0
+        for i, (qi, li) in enumerate(pts):
+            w = 1.0
+            for j, (qj, _) in enumerate(pts):
+                if j != i:
+                    w *= (q - qj) / (qi - qj)
+            out += w * li
+        return out if out > 1.0 else pts[-1][1]
 
     def inputs(self) -> dict:
         return {"control": self.control, "slip": self.slip, "p": self.p, "d": self.d, "w": self.w,
@@ -118,9 +135,12 @@ def _free_at_gap(d, lambda0, n) -> State:
     if d == 0.0:
         return free_inflation(0.0, lambda0, n)
     sgn = 1.0 if d > 0 else -1.0
+    memo: dict = {}
 
-    def resid(q):
-        return sgn * free_inflation(sgn * q, lambda0, n).d - abs(d)
+    def resid(q):  # continuation in lc from the last evaluation (secant iterations, bracket fallback)
+        st = free_inflation(sgn * q, lambda0, n, memo.get("lc"), memo)
+        memo["lc"] = st.lc
+        return sgn * st.d - abs(d)
 
     hi = 0.5
     while True:

@@ -7,12 +7,14 @@ from scipy.optimize import brentq
 
 from ..errors import ConvergenceError
 from . import kernels as K
+from . import newton as N
 from .state import DEFAULT_N, Config, State, evaluate
 
 __all__ = ["free_inflation", "apex_deflection"]
 
 
-def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None) -> State:
+def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None,
+                   memo: dict | None = None) -> State:
     """The Case I free-inflation state at pressure p (lambda1 = lambda2 = lc at the apex).
 
     Parameters
@@ -25,6 +27,8 @@ def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float
         Integration steps.
     lc_guess : float, optional
         A nearby apex stretch (continuation): Newton from it instead of a bracketing search.
+    memo : dict, optional
+        Kept between calls of a continuation: the last slope of r(beta) in lc (secant iterations).
 
     Returns
     -------
@@ -44,10 +48,17 @@ def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float
     def resid(lc):
         return float(K.from_apex(K.FREE, lc, cfg.beta, n, q, K.A, K.B, K.C)[0]) - 1.0
 
-    lc = _newton(resid, lc_guess) if lc_guess is not None else None
-    if lc is None:
-        lc = _bracketed(resid, lambda0, p)
-    st = evaluate(cfg, q, lc)
+    st = None
+    if lc_guess is not None:
+        memo = {} if memo is None else memo
+        lc, memo["slope"], y = N.free_newton(q, cfg.beta, n, lc_guess, memo.get("slope", math.nan))
+        if not math.isnan(lc):
+            lc = float(lc)
+            st = State(lc, 0.0, 0.0, q, 0.0, float(y[1]), 0.0, 0.0, float(y[0]), float(y[2]), lc, lc, lc,
+                       float(y[4]), float(y[5]))
+    if st is None or not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
+        # no guess, no quick convergence, or a root outside Case I: bracket from lambda0 upwards
+        st = evaluate(cfg, q, _bracketed(resid, lambda0, p))
     if not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
         raise ConvergenceError("exact free inflation: no Case I state (theta > pi/2 at the clamp)",
                                {"p": p, "lambda0": lambda0})
@@ -59,21 +70,6 @@ def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float
 def apex_deflection(p: float, lambda0: float, n: int = DEFAULT_N) -> float:
     """d0(p): the apex deflection of the freely inflated exact membrane, over b."""
     return free_inflation(p, lambda0, n).d
-
-
-def _newton(resid, x):
-    """Secant-Newton from a close guess; None if it does not converge quickly."""
-    fx = resid(x)
-    for _ in range(12):
-        h = 1e-7 * x
-        dfx = (resid(x + h) - fx) / h
-        if not (math.isfinite(fx) and math.isfinite(dfx)) or dfx <= 0.0:
-            return None
-        x = x - fx / dfx
-        fx = resid(x)
-        if abs(fx) < 1e-14:
-            return x
-    return None
 
 
 def _bracketed(resid, lambda0, p):

@@ -3,48 +3,31 @@
 A problem names its unknowns among ``lc, rho_a, alpha, l1p, p`` and as many residuals among
 ``clamp`` (r(beta) = 1, i.e. b = lambda0 beta), ``a`` (contact radius = target), ``d`` (gap =
 target) and ``G`` (G = w). The Jacobian is taken by forward differences of the shot (the shot is a
-fixed-step integration, smooth in its inputs to rounding).
+fixed-step integration, smooth in its inputs to rounding). The loop itself is compiled
+(``newton.py``); this module translates names to codes and results to a ``State``.
 """
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from ..errors import ConvergenceError
+from . import kernels as K
+from . import newton as N
 from .state import Config, State, evaluate
 
 __all__ = ["shoot", "solve_state"]
 
 _KEYS = ("p", "lc", "rho_a", "alpha", "l1p")
+_RES = {"clamp": N.CLAMP, "a": N.A_RES, "d": N.D_RES, "G": N.G_RES}
+_EDGES = {"continuous": K.CONTINUOUS, "frictionless": K.FRICTIONLESS, "given": K.GIVEN}
+_WHY = {N.BAD_START: "shooting from the start guess", N.BAD_JAC: "Jacobian outside the domain",
+        N.SINGULAR: "singular Jacobian", N.NO_LINE: "Newton line search", N.NO_CONV: "Newton iterations"}
 
 
 def shoot(cfg: Config, edge: str, values: dict) -> State:
     """Evaluate the state with the given values of ``p, lc, rho_a, alpha, l1p``."""
     return evaluate(cfg, values["p"], values["lc"], values.get("rho_a", 0.0),
                     values.get("alpha", 0.0), edge, values.get("l1p"))
-
-
-def _residual(st: State, names, targets) -> np.ndarray:
-    out = np.empty(len(names))
-    for i, nm in enumerate(names):
-        if nm == "clamp":
-            out[i] = st.r_end - 1.0
-        elif nm == "a":
-            out[i] = st.a - targets["a"]
-        elif nm == "d":
-            out[i] = st.d - targets["d"]
-        elif nm == "G":
-            out[i] = st.G - targets["w"]
-        else:
-            raise ValueError(nm)
-    return out
-
-
-def _at(cfg, edge, fixed, unknowns, x):
-    vals = dict(fixed)
-    vals.update(zip(unknowns, (float(v) for v in x)))
-    return shoot(cfg, edge, vals)
 
 
 def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residuals: tuple,
@@ -60,88 +43,30 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
     ConvergenceError
         No convergence, or the iterate left the domain (non-finite shot).
     """
-    x = np.asarray(x0, dtype=float).copy()
-    info = {**fixed, **targets, "lambda0": cfg.lambda0}
     memo = {} if memo is None else memo
-    st = _safe(cfg, edge, fixed, unknowns, x)
-    if st is None:
-        raise ConvergenceError("exact membrane: shooting from the start guess", info)
-    res = _residual(st, residuals, targets)
+    vals = [fixed.get(k) for k in _KEYS]
+    vals = np.array([0.0 if v is None else float(v) for v in vals])
+    codes = memo.get("codes")
+    if codes is None or codes[0] != (unknowns, residuals):
+        codes = ((unknowns, residuals), np.array([_KEYS.index(k) for k in unknowns], dtype=np.int64),
+                 np.array([_RES[r] for r in residuals], dtype=np.int64))
+        memo["codes"] = codes
+    _, unk, res = codes
+    tg = np.array([targets.get("a", 0.0), targets.get("d", 0.0), targets.get("w", 0.0)])
+    k = len(unknowns)
     J = memo.get("J")
-    fresh = False
-    for _ in range(max_iter):
-        nrm = float(np.max(np.abs(res)))
-        if nrm < tol:
-            memo["J"] = J
-            return st
-        if J is None or J.shape != (len(res), len(x)):
-            J, fresh = _jacobian(cfg, edge, fixed, unknowns, x, res, residuals, targets, info), True
-        try:
-            dx = np.linalg.solve(J, -res)
-        except np.linalg.LinAlgError:
-            dx = None
-        sn = None if dx is None else _safe(cfg, edge, fixed, unknowns, x + dx)
-        rn = None if sn is None else _residual(sn, residuals, targets)
-        if rn is not None and np.max(np.abs(rn)) < 0.5 * nrm:
-            J = J + np.outer((rn - res) - J @ dx, dx) / float(dx @ dx)
-            x, st, res, fresh = x + dx, sn, rn, False
-            continue
-        if not fresh:
-            J = None
-            continue
-        x, st, res = _line_search(cfg, edge, fixed, unknowns, x, dx, nrm, residuals, targets, info)
-        J = None
-    memo["J"] = None
-    if float(np.max(np.abs(res))) < 1e3 * tol:
-        return st
-    raise ConvergenceError("exact membrane: Newton iterations", info)
-
-
-def _jacobian(cfg, edge, fixed, unknowns, x, res, residuals, targets, info):
-    J = np.empty((len(res), len(x)))
-    for j in range(len(x)):
-        h = 1e-7 * max(1e-3, abs(x[j]))
-        xp = x.copy()
-        xp[j] += h
-        sp = _safe(cfg, edge, fixed, unknowns, xp)
-        if sp is None:
-            xp[j] -= 2 * h
-            h = -h
-            sp = _safe(cfg, edge, fixed, unknowns, xp)
-            if sp is None:
-                raise ConvergenceError("exact membrane: Jacobian outside the domain", info)
-        J[:, j] = (_residual(sp, residuals, targets) - res) / h
-    return J
-
-
-def _line_search(cfg, edge, fixed, unknowns, x, dx, nrm, residuals, targets, info):
-    if dx is None:
-        raise ConvergenceError("exact membrane: singular Jacobian", info)
-    lam = 1.0
-    while lam > 1e-4:
-        xn = x + lam * dx
-        sn = _safe(cfg, edge, fixed, unknowns, xn)
-        if sn is not None:
-            rn = _residual(sn, residuals, targets)
-            if np.max(np.abs(rn)) < (1 - 1e-4 * lam) * nrm or nrm < 1e-9:
-                return xn, sn, rn
-        lam *= 0.5
-    raise ConvergenceError("exact membrane: Newton line search", info)
-
-
-def _safe(cfg, edge, fixed, unknowns, x):
-    vals = dict(fixed)
-    vals.update(zip(unknowns, (float(v) for v in x)))
-    if vals["lc"] <= 1.0 or vals.get("rho_a", 0.0) < 0.0 or vals.get("rho_a", 0.0) >= cfg.beta:
-        return None
-    if "l1p" in vals and vals["l1p"] is not None and vals["l1p"] <= 0.0:
-        return None
-    if edge == "frictionless" and not 0.0 <= vals.get("alpha", 0.0) < 0.5 * math.pi:
-        return None
-    try:
-        st = shoot(cfg, edge, vals)
-    except (ValueError, ZeroDivisionError, OverflowError):
-        return None
-    if not all(math.isfinite(v) for v in (st.r_end, st.d, st.f, st.G, st.theta_end)):
-        return None
-    return st
+    if J is None or J.shape != (len(res), k):
+        J = np.full((len(res), k), np.nan)
+    out = N.newton_packed(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg,
+                          np.asarray(x0, dtype=float), J, tol, max_iter)
+    status = int(out[0])
+    J = out[2 + k + K.N_OUT:].reshape(len(res), k)
+    memo["J"] = None if np.isnan(J[0, 0]) else J
+    memo["shots"] = memo.get("shots", 0) + int(out[1])
+    if status != N.OK:
+        raise ConvergenceError("exact membrane: " + _WHY[status],
+                               {**fixed, **targets, "lambda0": cfg.lambda0})
+    vals[unk] = out[2:2 + k]
+    r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = out[2 + k:2 + k + K.N_OUT].tolist()
+    p, lc, rho_a, alpha = vals[:4].tolist()
+    return State(lc, max(rho_a, 0.0), alpha, p, a, d, f, G, r_end, th, l1m, l1p_, l2, u, v)
