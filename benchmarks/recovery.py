@@ -106,6 +106,7 @@ def run_one(job: dict) -> dict:
     rec["slip_outcome"] = rs.outcome(slip.get("selected"), job["slip"]) if rep else "error"
     rec["delta_bic"] = slip.get("delta_bic")
     rec["warnings"] = list((rep or {}).get("warnings", []))
+    rec["warned_duplicates"] = any("duplicat" in w.lower() for w in rec["warnings"])
     return rec
 
 
@@ -131,11 +132,18 @@ def run(args, argv: list[str]) -> dict:
     """Run the plan (in ``--workers`` processes), summarise, write OUT.json / OUT.md / OUT.png."""
     jobs = plan(args)
     t0 = time.perf_counter()
-    if args.workers > 1:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            records = list(pool.map(run_one, jobs, chunksize=1))
-    else:
-        records = [run_one(j) for j in jobs]
+    records = []
+    pool = ProcessPoolExecutor(max_workers=args.workers) if args.workers > 1 else None
+    try:
+        results = pool.map(run_one, jobs, chunksize=1) if pool else map(run_one, jobs)
+        for k, rec in enumerate(results, 1):
+            records.append(rec)
+            print(f"[{k}/{len(jobs)} {time.perf_counter() - t0:.0f} s] {rec['case']} {rec['slip']} "
+                  f"{rec['variant']} {100 * rec['noise']:g} % #{rec['rep']}: W {rec['work_of_adhesion']['status']} "
+                  f"{rec['work_of_adhesion']['covered']}, slip {rec['slip_outcome']}", file=sys.stderr, flush=True)
+    finally:
+        if pool:
+            pool.shutdown()
     out = {"provenance": provenance(argv, time.perf_counter() - t0, args.workers),
            "settings": {k: v for k, v in vars(args).items() if k != "out"} | {
                "truth": rc.TRUTH, "baseline_fraction": rc.BASELINE,

@@ -73,6 +73,14 @@ def _errors(out: dict) -> str:
     return "Fits that raised (message: count):\n\n" + "\n".join(f"- `{m}`: {n}" for m, n in seen.items()) + "\n"
 
 
+def _duplicates(out: dict) -> str:
+    dup = [c for c in out["cells"] if c["variant"] == "duplicated"]
+    if not dup:
+        return "Not run.\n"
+    warned, n = sum(c["warned_duplicates"] for c in dup), sum(c["n"] for c in dup)
+    return f"A warning names the duplicated rows in {warned} of {n} fits of the duplicated variant.\n"
+
+
 def write_markdown(out: dict, path: Path) -> None:
     """OUT.md: provenance, the pooled table (variant x noise), the per-cell table, failures."""
     p, st = out["provenance"], out["settings"]
@@ -89,5 +97,5 @@ def write_markdown(out: dict, path: Path) -> None:
             "where pull-off ends pinning); duplicated (every row twice).\n", LEGEND,
             "## Pooled over cases and slip conditions\n", table(out["pooled"], ("variant", "noise")), "",
             "## Per case\n", table(out["cells"], ("case", "slip", "variant", "noise")), "",
-            "## Failures\n", _errors(out)]
+            "## Failures\n", _errors(out), "## Duplicated rows\n", _duplicates(out)]
     path.write_text("\n".join(text), encoding="utf-8")

@@ -99,7 +99,8 @@ def summarize(recs: list[dict]) -> dict:
     wall = [r["wall_s"] for r in recs if r.get("wall_s") is not None]
     out = {"n": len(recs), "errors": sum(r.get("error") is not None for r in recs),
            "slip_outcomes": {o: sum(r["slip_outcome"] == o for r in recs) for o in OUTCOMES},
-           "median_wall_s": float(np.median(wall)) if wall else None}
+           "median_wall_s": float(np.median(wall)) if wall else None,
+           "warned_duplicates": sum(bool(r.get("warned_duplicates")) for r in recs)}
     for name in PARAMS:
         out[name] = _param_summary(recs, name)
     return out
