@@ -52,24 +52,29 @@ def test_fit_sample_end_to_end(tmp_path, capsys):
     assert report["method"] == "lsq"
     assert set(report["slip"]) >= {"selected", "verdict", "delta_aic", "delta_bic"}
     assert report["slip"]["selected"] == "no-slip"
-    assert report["slip"]["verdict"] == "no-slip favoured"
+    assert report["slip"]["verdict"].startswith("no-slip: very strong evidence")
+    assert report["slip"]["evidence"] == "very strong"
     for name in ("work_of_adhesion", "mu_h"):
         p = report["parameters"][name]
-        assert set(p) >= {"value", "stderr", "ci95", "unit"}
+        assert set(p) >= {"value", "stderr", "ci95", "unit", "status"}
+        assert p["status"] == "determined"
         assert abs(p["value"] / truth[name] - 1) < 0.05
         assert p["ci95"][0] <= truth[name] <= p["ci95"][1]
     assert report["parameters"]["work_of_adhesion"]["unit"] == "J/m^2"
     assert report["parameters"]["mu_h"]["unit"] == "N/m"
     for slip in ("no-slip", "frictionless"):
         assert set(report["fits"][slip]) >= {"parameters", "aic", "bic", "redchi"}
-    off = report["offsets"]["displacement_offset"]["value"]
+    assert "force" in report["offsets"] and report["observables"] == ["force"]
+    assert report["model"]["membrane"] == "large-stretch" and report["model"]["why"]
+    assert isinstance(report["diagnostics"], list)
+    off = report["offsets"]["displacement"]["value"]
     assert abs(off - truth["displacement_offset"]) < 5e-6
     assert report["provenance"]["seed"] == 3
     assert report["provenance"]["input_sha256"]
     assert report["n_points"] == truth["rows"] and report["model_evaluations"] > 0
     assert (out / "fit.png").stat().st_size > 10_000
     md = (out / "report.md").read_text(encoding="utf-8")
-    assert "no-slip favoured" in md and "W_ad" in md and "95 %" in md
+    assert "no-slip: very strong evidence" in md and "W_ad" in md and "95 %" in md
 
 
 def _run(tmp_path, capsys, csv_text: str | None, scene_text: str = SCENE, extra=()):

@@ -33,17 +33,20 @@ def _curve(control, slip="no-slip", noise=0.0, seed=0):
 @pytest.mark.parametrize("slip", ["no-slip", "frictionless"])
 def test_model_reproduces_noise_free_curve(control, slip):
     scene, curve, truth = _curve(control, slip)
-    model = CurveModel(curve, scene, slip)
+    model = CurveModel(curve, scene, slip, fixed_split=True)
     pred = model.predict(TRUE["work_of_adhesion"], TRUE["mu_h"], truth["x_offset"])
     # interpolation of a 150-row history against a 2000-row one: well below 0.5 % noise
     assert np.max(np.abs(pred - curve.force)) < 1e-3 * np.max(curve.force)
     assert model.segments.i_jump == truth["i_jump"]
+    # the free split (the default) puts pull-off at the same row from the parameters alone
+    assert CurveModel(curve, scene, slip).split(TRUE["work_of_adhesion"], TRUE["mu_h"], truth["x_offset"]) \
+        == truth["i_jump"]
 
 
 @pytest.mark.parametrize("control", ["displacement", "pressure"])
 def test_zero_before_contact_and_after_the_jump(control):
     scene, curve, truth = _curve(control)
-    model = CurveModel(curve, scene, "no-slip")
+    model = CurveModel(curve, scene, "no-slip", fixed_split=True)
     pred = model.predict(TRUE["work_of_adhesion"], TRUE["mu_h"], truth["x_offset"])
     xd = model.dimensionless_x(TRUE["mu_h"], truth["x_offset"])
     pcs = model.pieces(TRUE["work_of_adhesion"], TRUE["mu_h"], truth["x_offset"])
@@ -60,7 +63,7 @@ def test_prediction_is_continuous_in_the_parameters(control):
     the clamp beyond the model's turning point keeps it continuous): ten times smaller steps give at
     least ~3 times (sqrt(10), the Hölder-1/2 rate at the turning point) smaller changes."""
     scene, curve, truth = _curve(control)
-    model = CurveModel(curve, scene, "no-slip")
+    model = CurveModel(curve, scene, "no-slip", fixed_split=True)  # the free split: tests/test_trust_model.py
     base = dict(work_of_adhesion=0.4, mu_h=2.0, x_offset=truth["x_offset"])
     f0 = model.predict(**base)
     scale = np.max(np.abs(f0))
@@ -82,7 +85,7 @@ def test_prediction_is_continuous_in_the_parameters(control):
 
 def test_clamp_beyond_the_turning_point_is_the_turning_point_force():
     scene, curve, truth = _curve("displacement")
-    model = CurveModel(curve, scene, "no-slip")
+    model = CurveModel(curve, scene, "no-slip", fixed_split=True)
     # a model that detaches earlier than the data: lower W
     w = 0.3
     pcs = model.pieces(w, 2.0, truth["x_offset"])
@@ -104,7 +107,7 @@ def test_rows_either_side_of_the_jump_share_a_displacement():
     same = dataclasses.replace(curve, x=x)
     seg = segment(same)
     assert seg.i_jump == j
-    model = CurveModel(same, scene, "no-slip")
+    model = CurveModel(same, scene, "no-slip", fixed_split=True)
     pred = model.predict(0.4, 2.0, truth["x_offset"])
     assert pred[j - 1] < -0.1 * np.max(pred)
     assert pred[j] == 0.0
@@ -132,9 +135,10 @@ def test_verdict_thresholds():
     assert compare({"no-slip": 0.0, "frictionless": 10.5}, aic)["selected"] == "no-slip"
     v = compare({"no-slip": 5.0, "frictionless": 0.0}, aic)
     assert v["selected"] is None and v["evidence"] == "positive" and v["favoured"] == "frictionless"
-    assert v["verdict"] == "the data cannot tell them apart"
+    assert v["verdict"].startswith("frictionless: positive evidence, not selected")
     v = compare({"no-slip": 0.0, "frictionless": 1.0}, aic)
-    assert v["selected"] is None and v["evidence"] == "none"
+    assert v["selected"] is None and v["evidence"] == "cannot tell"
+    assert v["verdict"] == "the data cannot tell them apart"
     assert compare({"frictionless": 3.0}, {"frictionless": 1.0})["selected"] == "frictionless"
 
 

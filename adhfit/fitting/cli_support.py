@@ -55,7 +55,10 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
                    help="output directory (default: ./<DATA stem>_fit)")
     p.add_argument("--sigma", default=None, metavar="FORCE",
                    help="force noise, e.g. '0.01 mN' (default: estimated from the residuals)")
-    p.add_argument("--force-offset", action="store_true", help="also fit a load-cell offset")
+    p.add_argument("--force-offset", action="store_true",
+                   help="fit the load-cell zero (the default; kept for older scripts)")
+    p.add_argument("--no-force-offset", action="store_true",
+                   help="fix the load-cell zero at 0 instead of fitting it (the data must be tared)")
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit the displacement offset (displacement control)")
     p.add_argument("--pressure-offset", action="store_true", help="fit a pressure offset (pressure control)")
@@ -74,6 +77,12 @@ def _x_offset(args, control: str) -> bool:
             raise InputError("--pressure-offset", True, "used with pressure control only")
         return not args.no_offset
     return bool(args.pressure_offset)
+
+
+def _force_offset(args) -> bool:
+    if args.no_force_offset and args.force_offset:
+        raise InputError("--no-force-offset", True, "absent when --force-offset is given")
+    return not args.no_force_offset
 
 
 def run_fit(args) -> int:
@@ -99,7 +108,7 @@ def run_fit(args) -> int:
     scene = load_scene(args.scene)
     curve = read_curve(args.data, scene.control)
     result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
-                       fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
+                       fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
                        seed=args.seed, points=args.points, profile=not args.no_profile)
     out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")
     out.mkdir(parents=True, exist_ok=True)

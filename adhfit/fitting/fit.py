@@ -52,39 +52,74 @@ def _check_options(method, slip, sigma, points):
         raise InputError("points", points, "an integer in [40, 5000]")
 
 
+def _hull(name: str, ests: list[Estimate], chosen: Estimate) -> Estimate:
+    """One estimate covering both slip conditions' (undecided slip): the widest status and interval."""
+    los = [e.ci95[0] if e.ci95 is not None else None for e in ests]
+    his = [e.ci95[1] if e.ci95 is not None else None for e in ests]
+    if any(e.status == "undetermined" for e in ests):
+        return dataclasses.replace(chosen, ci95=None, status="undetermined")
+    lo = None if any(v is None for v in los) else min(los)
+    hi = None if any(v is None for v in his) else max(his)
+    status = {(False, False): "determined", (False, True): "lower_bound", (True, False): "upper_bound",
+              (True, True): "undetermined"}[(lo is None, hi is None)]
+    ses = [e.stderr for e in ests if e.stderr is not None]
+    return dataclasses.replace(chosen, ci95=None if status == "undetermined" else (lo, hi), status=status,
+                               stderr=max(ses) if ses else None,
+                               ci_method=f"{chosen.ci_method} (hull over both slip conditions)")
+
+
 def _reported(fits: dict[str, SlipFit], verdict: dict) -> dict[str, Estimate]:
     """Estimates of the selected fit; undecided: the favoured fit's, intervals hulled over both."""
     chosen = fits[verdict["parameters_from"]]
     if verdict["selected"] is not None or len(fits) == 1:
         return dict(chosen.parameters)
-    out = {}
-    for name, e in chosen.parameters.items():
-        cis = [f.parameters[name].ci95 for f in fits.values() if name in f.parameters]
-        if any(c is None for c in cis):
-            out[name] = e
-            continue
-        hull = (min(c[0] for c in cis), max(c[1] for c in cis))
-        ses = [f.parameters[name].stderr for f in fits.values() if f.parameters[name].stderr is not None]
-        out[name] = dataclasses.replace(e, ci95=hull, stderr=max(ses) if ses else None,
-                                        ci_method=f"{e.ci_method} (hull over both slip conditions)")
-    return out
+    return {name: _hull(name, [f.parameters[name] for f in fits.values() if name in f.parameters], e)
+            for name, e in chosen.parameters.items()}
 
 
-def _warnings(scene, fits, verdict, curve) -> list[str]:
+def _warnings(scene, fits, verdict, curve, reported) -> tuple[list[str], list[str]]:
+    """(warnings, diagnostics): plain sentences for a lab user, and solver details."""
     out = list(scene.warnings())
     rep = fits[verdict["parameters_from"]]
-    out += [f"[{rep.slip}] {w}" for w in rep.warnings]
+    out += list(rep.warnings)
+    diag = [f"[{s}] {d}" for s, f in fits.items() for d in f.diagnostics]
     if verdict["selected"] is None and len(fits) > 1:
-        out.append(f"slip condition undecided ({verdict['explanation']}); the estimates are the "
-                   f"{verdict['favoured']} fit's, their 95 % intervals cover both conditions' intervals")
-    w = rep.parameters["work_of_adhesion"].value / rep.parameters["mu_h"].value
+        out.append(f"The slip condition is undecided: the data cannot tell no-slip from frictionless contact "
+                   f"for sure ({verdict['explanation'].rstrip('.')}). The estimates are the {verdict['favoured']} "
+                   f"fit's, and their 95 % intervals cover both conditions' intervals.")
+    w_e, mu_e = rep.parameters["work_of_adhesion"], rep.parameters["mu_h"]
     from ..params import DIMENSIONLESS  # noqa: PLC0415
-    if w > _W_EDGE * DIMENSIONLESS["w"].upper:
-        out.append(f"W_ad/μh = {w:.3g} is at the model's upper bound {DIMENSIONLESS['w'].upper:g}")
+    if w_e.value and mu_e.value and w_e.value / mu_e.value > _W_EDGE * DIMENSIONLESS["w"].upper:
+        out.append(f"W_ad/μh = {w_e.value / mu_e.value:.3g} is at the largest value the model covers "
+                   f"({DIMENSIONLESS['w'].upper:g}): the estimate is unreliable.")
     if any(not f.success for f in fits.values()):
-        out.append("the optimiser did not report convergence for: "
-                   + ", ".join(s for s, f in fits.items() if not f.success))
-    return out
+        diag.append("the optimiser did not report convergence for: "
+                    + ", ".join(s for s, f in fits.items() if not f.success))
+    return out, diag
+
+
+def _segments(seg, rep: SlipFit) -> dict:
+    """Row-order segments of the report: the end of loading from the data, pull-off from the fit."""
+    d = seg.as_dict()
+    j = rep.split
+    n = seg.n
+    d.update({"i_jump": j, "n_attached": (n if j is None else j) - seg.i_turn - 1,
+              "n_detached": 0 if j is None else n - j, "jump_from": "fitted model (its turning point)"})
+    if j is not None and rep.predicted is not None:
+        d["jump"] = float(abs(rep.predicted[j - 1] - rep.predicted[j]))
+    return d
+
+
+def _decide(fits: dict[str, SlipFit]) -> dict:
+    """The slip verdict; ΔBIC is divided by the widening² of the better fit when its noise is correlated."""
+    bic = {s: f.bic for s, f in fits.items()}
+    aic = {s: f.aic for s, f in fits.items()}
+    if len(fits) > 1:
+        best = min(bic, key=bic.get)
+        f2 = fits[best].widening ** 2
+        bic = {s: bic[best] + (v - bic[best]) / f2 for s, v in bic.items()}
+        aic = {s: aic[best] + (v - aic[best]) / f2 for s, v in aic.items()}
+    return compare(bic, aic)
 
 
 def _provenance(curve, scene, seed, method, options) -> dict:
@@ -101,7 +136,7 @@ def _provenance(curve, scene, seed, method, options) -> dict:
 
 
 def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
-              fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
+              fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
               points: int = DEFAULT_POINTS, profile: bool = True) -> FitResult:
     """Fit W_ad, μh and the slip condition to a measured curve.
 
@@ -120,7 +155,8 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     fit_x_offset : bool, optional
         Fit a displacement offset (default under displacement control) or a pressure offset.
     fit_force_offset : bool
-        Fit a load-cell offset.
+        Fit the load-cell zero (default; the rows before contact and after pull-off pin it).
+        ``False`` fixes it at zero.
     seed : int, optional
         Recorded in the provenance (least squares draws no random numbers).
     points : int
@@ -147,19 +183,24 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
                            extra_starts=extra)
     # profiles cost ~2/3 of a fit: compute them only for the fit whose estimates are reported
     fits = {s: summarize(r, profile=False) for s, r in raws.items()}
-    verdict = compare({s: f.bic for s, f in fits.items()}, {s: f.aic for s, f in fits.items()})
+    verdict = _decide(fits)
     if profile:  # the reported fit only; an undecided verdict hulls with the other's covariance interval
         wanted = verdict["parameters_from"]
         fits[wanted] = summarize(raws[wanted], profile=True)
+        verdict = _decide(fits)
+        if verdict["parameters_from"] != wanted:
+            verdict = dict(verdict, parameters_from=wanted)
     rep = fits[verdict["parameters_from"]]
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
                "fit_force_offset": fit_force_offset, "points": points, "profile": profile}
+    reported = _reported(fits, verdict)
+    warnings, diagnostics = _warnings(scene, fits, verdict, curve, reported)
     return FitResult(
-        method=method, slip=verdict, parameters=_reported(fits, verdict), fits=fits,
+        method=method, slip=verdict, parameters=reported, fits=fits,
         n_points=len(curve.x), n_excluded=len(curve.excluded), sigma=rep.sigma,
         sigma_source="given" if sigma is not None else SIGMA_ESTIMATED,
-        warnings=tuple(_warnings(scene, fits, verdict, curve)),
+        warnings=tuple(warnings), diagnostics=tuple(diagnostics),
         n_evaluations=sum(f.n_evaluations for f in fits.values()),
         n_histories=sum(f.n_histories for f in fits.values()), wall_time=time.perf_counter() - t0,
-        provenance=_provenance(curve, scene, seed, method, options), segments=seg.as_dict(),
+        provenance=_provenance(curve, scene, seed, method, options), segments=_segments(seg, rep),
         excluded=tuple(curve.excluded), curve=curve, raw={s: f.raw for s, f in fits.items()})

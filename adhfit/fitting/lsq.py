@@ -26,7 +26,7 @@ import lmfit
 import numpy as np
 
 from ..params import FITTED
-from .model import OFFSET_NAME, CurveModel, ModelDomainError
+from .model import OFFSET_NAME, CurveModel, ModelDomainError, Segments
 from .starts import Start, data_start, noise_estimate
 
 __all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise"]
@@ -91,7 +91,8 @@ class Parametrisation:
     def si(self, values: dict) -> dict:
         """Internal values (a dict or lmfit Parameters) -> SI dict with all four model arguments."""
         v = {k: float(getattr(values[k], "value", values[k])) for k in values}
-        return {"work_of_adhesion": math.exp(v["ln_work_of_adhesion"]), "mu_h": math.exp(v["ln_mu_h"]),
+        return {"work_of_adhesion": math.exp(min(v["ln_work_of_adhesion"], 700.0)),
+                "mu_h": math.exp(min(v["ln_mu_h"], 700.0)),
                 "x_offset": v.get("x_offset", 0.0) * self.x_scale,
                 "force_offset": v.get("force_offset", 0.0) * self.f_scale}
 
@@ -105,17 +106,20 @@ class Parametrisation:
         return np.array(d)
 
 
-def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float):
+def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float | None = None):
     """The residual vector for lmfit (params -> array).
 
-    (F_measured - F_model)/scale at every row, then, when the data show the pull-off jump, one term
-    (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position against the model's turning
-    point, with σ_jump from the row spacing (:attr:`CurveModel.jump`) and σ the force noise (given,
-    or the robust estimate), so that the term has the weight of one observation.
+    (F_measured - F_model)/scale at every row.  With a free split the model itself decides which
+    unloading rows are detached (:meth:`CurveModel.attached_weight`).  With a fixed split that shows
+    the pull-off, one more term (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position
+    against the model's turning point, with σ_jump = spacing/√12 (:attr:`CurveModel.jump`) and σ the
+    force noise (given, or the robust estimate), so that the term has the weight of one observation.
     """
     force = model.force
     jump = model.jump
     n = force.size + (jump is not None)
+    if sigma is None:
+        sigma = noise_estimate(force) or 1e-3 * float(np.max(np.abs(force)) or 1.0)
 
     def residual(params):
         si = par.si(params.valuesdict())
@@ -202,7 +206,7 @@ def _run_starts(residual, par, runs, *, scale_covar):
 
 
 def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
-             fit_force_offset: bool = False, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
+             fit_force_offset: bool = True, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
     """Fit W_ad, μh (and offsets) of one slip condition by least squares.
 
     Parameters
@@ -233,7 +237,7 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     scale = float(sigma) if sigma is not None else f_scale
     sigma_est = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * f_scale)
     residual = residual_function(model, par, scale, sigma_est)
-    base = data_start(model, fit_offset=fit_x_offset)
+    base = data_start(model, fit_offset=fit_x_offset, fit_force_offset=fit_force_offset)
     scored = []
     for s in _perturbed(base, par):
         r = residual(par.params(s))
@@ -241,5 +245,45 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     scored.sort(key=lambda t: t[0])
     runs = [s for _, s in scored[:n_runs]] + [Start(base, **e) for e in extra_starts]
     best, starts = _run_starts(residual, par, runs, scale_covar=sigma is None)
-    return RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
-                  sigma_given=sigma is not None, starts=starts)
+    raw = RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
+                 sigma_given=sigma is not None, starts=starts)
+    return raw if model.fixed_split else _refit_fixed(raw, sigma, sigma_est, base)
+
+
+def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start) -> RawFit:
+    """Second stage: fix the row split the free-split fit found and refit with the pull-off term.
+
+    The free split finds the detachment row by likelihood (no threshold); but with it the pull-off
+    position would be known to a fraction of a row (the ramp is steep when the jump is large against
+    the noise), while the data only place it somewhere between two rows.  The fixed split with the
+    pull-off term (σ_jump = spacing/√12) gives it its honest uncertainty.  Without a detached row
+    (the data end before the model's pull-off) the free-split fit is kept: there the rows must all
+    stay attached, which is what bounds W_ad from below.
+    """
+    m, par = raw.model, raw.par
+    si = par.si(raw.best.params)
+    try:
+        j = m.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+    except ModelDomainError:
+        return raw
+    if j is None or j >= m.x.size - 1 or j <= m.segments.i_turn + 1:
+        return raw
+    best = None
+    for cand in (j, j - 1, j + 1):  # the free split can stop one row off: let χ² pick among neighbours
+        if not m.segments.i_turn + 1 < cand < m.x.size:
+            continue
+        fit = _fixed_fit(raw, cand, sigma, sigma_est, base, si)
+        if best is None or fit.best.chisqr < best.best.chisqr:
+            best = fit
+    return best
+
+
+def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict) -> RawFit:
+    """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
+    m, par, f = raw.model, raw.par, raw.model.force
+    seg = Segments(n=m.segments.n, i_turn=m.segments.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
+    fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True)
+    residual = residual_function(fixed, par, raw.scale, sigma_est)
+    best, starts = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None)
+    return RawFit(slip=m.slip, best=best, model=fixed, par=par, scale=raw.scale,
+                  sigma_given=raw.sigma_given, starts=raw.starts + starts)

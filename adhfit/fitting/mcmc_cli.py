@@ -15,7 +15,7 @@ def run_fit_mcmc(args) -> int:
     from ..report.markdown import write_markdown  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from .cli_support import _summary, _x_offset  # noqa: PLC0415
+    from .cli_support import _force_offset, _summary, _x_offset  # noqa: PLC0415
     from .mcmc_fit import fit_curve_mcmc  # noqa: PLC0415
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     scene = load_scene(args.scene)
@@ -23,7 +23,7 @@ def run_fit_mcmc(args) -> int:
     out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")
     out.mkdir(parents=True, exist_ok=True)
     result = fit_curve_mcmc(curve, scene, slip=args.slip, sigma=sigma,
-                            fit_x_offset=_x_offset(args, scene.control), fit_force_offset=args.force_offset,
+                            fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
                             seed=args.seed, points=args.points, outdir=out)
     write_json(result, out / "report.json")
     write_markdown(result, out / "report.md")

@@ -24,13 +24,13 @@ import numpy as np
 
 from .diagnostics import diagnose
 from .evidence import StudentT, importance_evidence, model_probabilities
-from .fit import _check_options, _inputs, _provenance
+from .fit import _check_options, _inputs, _provenance, _segments
 from .lsq import fit_slip
 from .mcmc import ParallelMap, default_workers, sample_posterior
 from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
 from .posterior import Target, default_priors
 from .result import Estimate, FitResult, clean
-from .selection import compare
+from .selection import SCALE, compare, evidence_word
 from .summary import summarize
 
 __all__ = ["McmcFitResult", "fit_curve_mcmc", "DEFAULTS"]
@@ -75,13 +75,39 @@ class McmcFitResult(FitResult):
         return d
 
 
-def _estimates(samples: np.ndarray, names: list[str], lsq: Mapping[str, Estimate]) -> dict[str, Estimate]:
+#: a posterior percentile within this fraction of the prior's range from its edge is prior-limited
+PRIOR_EDGE = 0.05
+
+
+def _edge(col: np.ndarray, prior) -> tuple[bool, bool]:
+    """(at lower edge, at upper edge): whether the 2.5 / 97.5 percentiles reach the prior's bounds, so
+    that the data bound the parameter from one side only (DESIGN.md A5b)."""
+    if prior is None or prior.dist == "normal":
+        return False, False
+    f = (np.log if prior.log else (lambda v: v))
+    lo, hi = float(f(prior.a)), float(f(prior.b))
+    vals = f(col) if prior.log else col
+    p_lo, p_hi = np.percentile(vals, [2.5, 97.5])
+    span = hi - lo
+    return bool(p_lo < lo + PRIOR_EDGE * span), bool(p_hi > hi - PRIOR_EDGE * span)
+
+
+def _estimates(samples: np.ndarray, names: list[str], lsq: Mapping[str, Estimate],
+               priors: list | None = None) -> dict[str, Estimate]:
     out = {}
     for k, name in enumerate(names):
         col = samples[:, k]
         lo, med, hi = np.percentile(col, [2.5, 50.0, 97.5])
-        out[name] = Estimate(name, float(med), float(np.std(col, ddof=1)), (float(lo), float(hi)), CI_METHOD,
-                             lsq[name].ci95 if name in lsq else None)
+        at_lo, at_hi = _edge(col, priors[k] if priors else None)
+        ci, status = (float(lo), float(hi)), "determined"
+        if at_lo and at_hi:
+            ci, status = None, "undetermined"
+        elif at_hi:  # one-sided 95 %: the 5th percentile
+            ci, status = (float(np.percentile(col, 5.0)), None), "lower_bound"
+        elif at_lo:
+            ci, status = (None, float(np.percentile(col, 95.0))), "upper_bound"
+        out[name] = Estimate(name, float(med), float(np.std(col, ddof=1)), ci, CI_METHOD,
+                             lsq[name].ci95 if name in lsq else None, status)
     return out
 
 
@@ -118,12 +144,22 @@ def _band(pmap: ParallelMap, target: Target, flat: np.ndarray, sigma: float, n: 
 
 
 def _verdict(probs: dict, lsq_verdict: dict) -> dict:
-    sel = probs["selected"]
+    sel, fav = probs["selected"], probs["favoured"]
+    word = "imposed"
     if len(probs["probabilities"]) == 1:
         verdict = lsq_verdict["verdict"]
-    else:
-        verdict = f"{sel} favoured" if sel else "the data cannot tell them apart"
-    return {"selected": sel, "verdict": verdict, "evidence": "posterior model probability",
+    else:  # the same scale as least squares, on 2 ln B (ln B lowered by 2 Monte-Carlo standard errors)
+        lbf, se = probs["log_bayes_factor"], probs["log_bayes_factor_stderr"]
+        two_ln_b = 2.0 * (lbf - 2.0 * se) if lbf is not None and se is not None else float("nan")
+        word = evidence_word(two_ln_b if math.isfinite(two_ln_b) else float("nan"))
+        p_fav = probs["probabilities"][fav]
+        if word == "cannot tell" and not sel:
+            verdict = "the data cannot tell them apart"
+        else:
+            verdict = f"{fav}: {word} evidence{'' if sel else ', not selected'} (P = {p_fav:.3g})"
+    return {"selected": sel, "verdict": verdict, "evidence": word,
+            "evidence_basis": "posterior model probability (2 ln B on the ΔBIC scale)",
+            "scale": [{"two_ln_bayes_factor_from": lo, "word": w} for lo, w in SCALE],
             "favoured": probs["favoured"], "probabilities": probs["probabilities"],
             "probability_lower": probs["probability_lower"], "threshold": probs["threshold"],
             "log_bayes_factor": probs["log_bayes_factor"], "log_bayes_factor_stderr": probs["log_bayes_factor_stderr"],
@@ -139,7 +175,7 @@ def _verdict(probs: dict, lsq_verdict: dict) -> dict:
 
 
 def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
-                   fit_x_offset: bool | None = None, fit_force_offset: bool = False, seed: int | None = None,
+                   fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
                    points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
                    progress: bool | None = None, **settings) -> McmcFitResult:
     """Bayesian fit of W_ad, μh (and offsets) under each slip condition, and the slip condition's probability.
@@ -219,14 +255,15 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         rng = np.random.default_rng(root.spawn(len(slips) + 1)[-1])
         rep = verdict["parameters_from"]
         fits = {s: dataclasses.replace(lsq_fits[s], parameters=_estimates(samples[s], targets[s].names,
-                                                                          lsq_fits[s].parameters),
-                                       warnings=tuple(lsq_fits[s].warnings) + tuple(diags[s]["warnings"]),
+                                                                          lsq_fits[s].parameters,
+                                                                          targets[s].priors),
+                                       diagnostics=tuple(lsq_fits[s].diagnostics) + tuple(diags[s]["warnings"]),
                                        raw=chains[s]) for s in slips}
         if verdict["selected"] is None and len(slips) > 1:
             mixed = _mixture(samples, probs["probabilities"], rng)
             reported = {k: dataclasses.replace(e, ci_method=CI_METHOD + ", averaged over both slip conditions "
                                                 "(weights = model probabilities)")
-                        for k, e in _estimates(mixed, targets[rep].names, {}).items()}
+                        for k, e in _estimates(mixed, targets[rep].names, {}, targets[rep].priors).items()}
         else:
             reported = dict(fits[rep].parameters)
         band = _band(pmap, targets[rep], chains[rep].flat, lsq_fits[rep].sigma, cfg["predictive_draws"], rng)
@@ -238,15 +275,16 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     if not converged:
         warn.append("MCMC NOT CONVERGED for: " + ", ".join(s for s, d in diags.items() if not d["converged"])
                     + " — do not trust these intervals (see the diagnostics)")
-    for s in slips:
-        warn += [f"[{s}] {w}" for w in fits[s].warnings]
+    warn += list(fits[rep].warnings)
+    diagnostics = [f"[{s}] {d}" for s in slips for d in fits[s].diagnostics]
     if path is not None and not any(c.groups for c in chains.values()):
         warn.append("the chains were not saved (emcee's HDF5 backend needs h5py, which is not installed)")
     if not probs["reliable"]:
         warn.append("the evidence estimate is unreliable (few effective importance weights)")
     if verdict["selected"] is None and len(slips) > 1:
-        warn.append(f"slip condition undecided ({verdict['explanation']}); the estimates average both "
-                    f"conditions' posteriors, weighted by their probabilities")
+        warn.append(f"The slip condition is undecided: the data cannot tell no-slip from frictionless contact "
+                    f"for sure ({verdict['explanation'].rstrip('.')}). The estimates average both conditions' "
+                    f"posteriors, weighted by their probabilities.")
     mc_time = sum(c.wall_time for c in chains.values())
     mc_evals = sum(c.n_evaluations for c in chains.values())
     summary = {
@@ -274,8 +312,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         n_excluded=len(curve.excluded), sigma=rep_fit.sigma,
         sigma_source="given" if sigma is not None else "integrated out (prior ∝ 1/σ); the value shown is the "
                                                        "least-squares estimate",
-        warnings=tuple(warn), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
+        warnings=tuple(warn), diagnostics=tuple(diagnostics), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
         n_histories=sum(f.n_histories for f in lsq_fits.values()), wall_time=wall,
-        provenance=_provenance(curve, scene, seed, "mcmc", options), segments=seg.as_dict(),
+        provenance=_provenance(curve, scene, seed, "mcmc", options), segments=_segments(seg, lsq_fits[rep]),
         excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), mcmc=summary,
         samples=samples, predictive=band)

@@ -268,7 +268,7 @@ class CurveModel:
     """
 
     def __init__(self, curve, scene, slip: str, *, points: int = DEFAULT_POINTS,
-                 segments: Segments | None = None) -> None:
+                 segments: Segments | None = None, fixed_split: bool = False) -> None:
         if slip not in ("no-slip", "frictionless"):
             raise InputError("slip", slip, "one of 'no-slip', 'frictionless'")
         if curve.control != scene.control:
@@ -280,7 +280,14 @@ class CurveModel:
         self.force = np.asarray(curve.force, float)
         self.x_max = float(self.x[self.segments.i_turn])
         self._loading = self.segments.loading
-        self._attached = self.segments.attached
+        self.fixed_split = bool(fixed_split)
+        # free split: every unloading row is attached or detached as the parameters say (see predict);
+        # fixed split: the rows of ``segments`` (attached ones clamped beyond the turning point)
+        self._attached = self.segments.attached if self.fixed_split else np.arange(self.x.size) > self.segments.i_turn
+        self._run_min = np.minimum.accumulate(self.x[self._attached]) if self._attached.any() else self.x[:0]
+        steps = np.abs(np.diff(self.x[self.segments.i_turn:]))
+        steps = steps[steps > 0]
+        self.spacing = float(np.median(steps)) if steps.size else 1e-9 * max(abs(self.x_max), 1e-30)
         self._cache: dict = {}
         self.n_histories = 0
         self.n_evaluations = 0
@@ -325,10 +332,10 @@ class CurveModel:
         self._cache[key] = pcs
         return pcs
 
-    def dimensionless_x(self, mu_h: float, x_offset: float) -> np.ndarray:
-        """The measured control values as δ/b or p (with the offset)."""
+    def dimensionless_x(self, mu_h: float, x_offset: float, x: np.ndarray | None = None) -> np.ndarray:
+        """The measured control values (or ``x``) as δ/b or p (with the offset)."""
         scales = self.scene.scales(float(mu_h))
-        shifted = self.x + x_offset
+        shifted = (self.x if x is None else x) + x_offset
         return scales.to_delta(shifted) if self.control == "displacement" else scales.to_p(shifted)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
@@ -357,18 +364,49 @@ class CurveModel:
         f = np.zeros(xd.shape)
         f[self._loading] = pcs.f_loading(xd[self._loading])
         f[self._attached] = pcs.f_unloading(xd[self._attached])
+        if not self.fixed_split:
+            f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
         return self.scene.scales(float(mu_h)).from_f(f) + force_offset
+
+    def attached_weight(self, mu_h: float, x_offset: float, pcs: Pieces) -> np.ndarray:
+        """Weight (0 detached .. 1 attached) of every unloading row, from the model's turning point.
+
+        A row is detached once the control value, in row order, has passed the model's turning point
+        (the running minimum of the unloading control values is below x_tp): the row split follows
+        from the parameters, not from a threshold on the data.  The switch is a linear ramp one row
+        spacing wide, centred on x_tp (the jump happened somewhere between two rows), so that χ² is
+        continuous in the parameters.
+        """
+        if self.fixed_split:
+            return np.ones(int(self._attached.sum()))
+        if not self._run_min.size:
+            return self._run_min
+        run = self.dimensionless_x(mu_h, x_offset, self._run_min)
+        h = abs(float(self.dimensionless_x(mu_h, x_offset, np.array([self.x_max]))[0]
+                      - self.dimensionless_x(mu_h, x_offset, np.array([self.x_max - self.spacing]))[0]))
+        return np.clip(0.5 + (run - pcs.x_tp) / max(h, 1e-300), 0.0, 1.0)
+
+    def split(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> int | None:
+        """First detached row for these parameters (weight below 1/2), ``None`` when the data end
+        before the model's pull-off."""
+        if self.fixed_split:
+            return self.segments.i_jump
+        pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
+        wt = self.attached_weight(mu_h, x_offset, pcs)
+        det = np.flatnonzero(wt < 0.5)
+        return int(self.segments.i_turn + 1 + det[0]) if det.size else None
 
     @property
     def jump(self) -> tuple[float, float] | None:
-        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units.
+        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units
+        (fixed split only: with a free split the rows themselves carry it).
 
         The jump happened between the last attached row and the first detached row: x_jump is their
         midpoint and σ_jump = |spacing|/sqrt(12), the standard deviation of a position known only to
         lie in that interval.  ``None`` when the data end before pull-off.
         """
         j = self.segments.i_jump
-        if j is None:
+        if j is None or not self.fixed_split:
             return None
         x_a, x_d = self.x[j - 1], self.x[j]
         return float(0.5 * (x_a + x_d)), max(abs(float(x_a - x_d)), 1e-12 * self.x_max) / math.sqrt(12.0)
@@ -387,6 +425,7 @@ class CurveModel:
         infinite there, so the Jacobian (and the covariance) is fragile (DESIGN.md B4)."""
         pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
         xd = self.dimensionless_x(mu_h, x_offset)[self._attached]
+        xd = xd[self.attached_weight(mu_h, x_offset, pcs) >= 0.5]
         if xd.size < 2:
             return False
         k = int(np.argmin(xd))

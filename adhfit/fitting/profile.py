@@ -23,13 +23,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from .lsq import minimise
+from .lsq import PENALTY, minimise
 
-__all__ = ["ProfileLimit", "profile_interval", "critical_value"]
+__all__ = ["ProfileLimit", "profile_interval", "one_side", "critical_value"]
 
 #: stop when sqrt(D/critical) is within this of 1
 TOL = 0.03
-MAX_SUBFITS = 6
+MAX_SUBFITS = 8
+#: largest first step of a profile, internal units (a factor e in W_ad or μh)
+MAX_FIRST_STEP = 1.0
 #: tolerance of the sub-fits (see lsq.minimise)
 SUBFIT_TOL = 1e-5
 
@@ -48,6 +50,11 @@ class ProfileLimit:
         A sub-fit found a lower χ² than the optimum (the fit had not converged).
     nfev : int
         Model evaluations spent.
+    outer : float or None
+        The probe nearest the optimum whose χ² exceeded the critical value (internal units).
+    open : bool
+        The data do not bound the parameter on this side: χ² stays below the critical value up to the
+        parameter's bound or to the edge of the model's domain (a one-sided result, DESIGN.md A5b).
     """
 
     value: float | None
@@ -55,6 +62,13 @@ class ProfileLimit:
     converged: bool
     better_optimum: bool
     nfev: int
+    open: bool = False
+    outer: float | None = None
+
+    @property
+    def bound(self) -> float | None:
+        """The limit if found, else the nearest probe known to lie beyond it (a conservative limit)."""
+        return self.value if self.converged else self.outer
 
 
 def critical_value(n_free: int, sigma_given: bool, level: float = 0.95) -> float:
@@ -71,7 +85,16 @@ def _subfit(residual, best, name, value, cov_shift, scale_covar):
         p.value = float(np.clip(best.params[other].value + shift, p.min, p.max))
     params[name].value = value
     params[name].vary = False
+    if np.all(np.abs(residual(params)) >= PENALTY * 0.999):  # the warm start left the model's domain
+        for other in cov_shift:
+            params[other].value = best.params[other].value
     return minimise(residual, params, scale_covar=scale_covar, max_nfev=200, tol=SUBFIT_TOL)
+
+
+def _outside(res) -> bool:
+    """True when a sub-fit ended outside the model's domain (the residual's penalty marker)."""
+    r = getattr(res, "residual", None)
+    return r is not None and np.size(r) > 0 and bool(np.all(np.abs(r) >= PENALTY * 0.999))
 
 
 def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimit:
@@ -80,16 +103,23 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
     theta0 = best.params[name].value
     cov = best.covar
     se = math.sqrt(cov[i, i]) if cov is not None and cov[i, i] > 0 else 0.1
-    slopes = {o: (cov[names.index(o), i] / cov[i, i] if cov is not None and cov[i, i] > 0 else 0.0)
+    slopes = {o: (cov[names.index(o), i] / cov[i, i] if cov is not None and 0 < cov[i, i] < 1.0 else 0.0)
               for o in names if o != name}
+    se = min(se, MAX_FIRST_STEP)  # a flat direction (huge se) is explored from a sane first step
     lo, hi = best.params[name].min, best.params[name].max
     t = direction * math.sqrt(crit) * se
-    tried, nfev, better = [], 0, False
+    tried, nfev, better, hit_domain = [], 0, False, False
     for k in range(MAX_SUBFITS):
         value = float(np.clip(theta0 + t, lo, hi))
         res = _subfit(residual, best, name, value, {o: s * (value - theta0) for o, s in slopes.items()},
                       scale_covar)
         nfev += res.nfev
+        if _outside(res):  # beyond the model's domain: the limit, if any, lies closer
+            hit_domain = True
+            above = [p for p in tried if p[1] >= 1.0]
+            t = 0.5 * (t + (min(above, key=lambda p: abs(p[0]))[0] if above else
+                            (tried[-1][0] if tried else 0.0)))
+            continue
         d = (res.chisqr - best.chisqr) / s2
         if d < -1e-6 * max(best.chisqr / s2, 1.0):
             better = True
@@ -98,9 +128,13 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
         if abs(q - 1.0) < TOL:
             return ProfileLimit(value, k + 1, True, better, nfev)
         if value in (lo, hi) and q < 1.0:
-            return ProfileLimit(value, k + 1, False, better, nfev)
+            return ProfileLimit(value, k + 1, False, better, nfev, open=True)
         t = _next_step(tried, direction, se)
-    return ProfileLimit(theta0 + tried[-1][0] if tried else None, len(tried), False, better, nfev)
+    above = [t for t, q in tried if q >= 1.0]
+    far = bool(tried) and max(abs(p[0]) for p in tried) > 10.0 * se
+    outer = theta0 + min(above, key=abs) if above else None
+    return ProfileLimit(theta0 + tried[-1][0] if tried else None, len(tried), False, better, nfev,
+                        open=not above and (hit_domain or far or not tried), outer=outer)
 
 
 def _next_step(tried, direction, se):
@@ -116,7 +150,8 @@ def _next_step(tried, direction, se):
     return t1 / q1 if q1 > 0.25 else 4.0 * t1
 
 
-def profile_interval(residual, best, name: str, *, sigma_given: bool) -> tuple[ProfileLimit, ProfileLimit]:
+def profile_interval(residual, best, name: str, *, sigma_given: bool,
+                     level: float = 0.95) -> tuple[ProfileLimit, ProfileLimit]:
     """Lower and upper 95 % profile limits of internal parameter ``name`` of an lmfit result.
 
     Parameters
@@ -129,9 +164,20 @@ def profile_interval(residual, best, name: str, *, sigma_given: bool) -> tuple[P
         Internal parameter name (e.g. ``"ln_work_of_adhesion"``).
     sigma_given : bool
         Whether the residuals are in units of a known σ (χ² test) or σ is estimated (F-test).
+    level : float
+        Two-sided level (0.90 gives the one-sided 95 % bound of a side whose other side is open).
     """
     n_free = int(best.ndata - best.nvarys)
-    crit = critical_value(n_free, sigma_given)
+    crit = critical_value(n_free, sigma_given, level)
     s2 = 1.0 if sigma_given else best.chisqr / max(n_free, 1)
     return (_side(residual, best, name, -1.0, crit, s2, not sigma_given),
             _side(residual, best, name, +1.0, crit, s2, not sigma_given))
+
+
+def one_side(residual, best, name: str, direction: float, *, sigma_given: bool,
+             level: float = 0.90) -> ProfileLimit:
+    """One profile limit at a two-sided ``level`` (0.90: a one-sided 95 % bound)."""
+    n_free = int(best.ndata - best.nvarys)
+    crit = critical_value(n_free, sigma_given, level)
+    s2 = 1.0 if sigma_given else best.chisqr / max(n_free, 1)
+    return _side(residual, best, name, direction, crit, s2, not sigma_given)

@@ -16,7 +16,12 @@ import numpy as np
 
 from ..params import FITTED
 
-__all__ = ["Estimate", "SlipFit", "FitResult", "clean"]
+__all__ = ["Estimate", "SlipFit", "FitResult", "clean", "MODEL"]
+
+#: the membrane model of every fit in this version, and why (DESIGN.md A5b)
+MODEL = {"membrane": "large-stretch",
+         "why": "The large-stretch membrane of the paper is the model fitted; it is accurate when the "
+                "pre-stretch λ0 is large (its error grows as λ0 approaches 1)."}
 
 
 def clean(x: Any) -> Any:
@@ -59,14 +64,19 @@ class Estimate:
         Where ``ci95`` comes from.
     ci95_covariance : (float, float) or None
         The covariance interval, kept for comparison with the profile.
+    status : {"determined", "lower_bound", "upper_bound", "undetermined"}
+        What the data say (DESIGN.md A5b): a value and a two-sided ``ci95``; a one-sided 95 % bound
+        (``ci95`` = ``(low, None)`` or ``(None, high)``); or nothing.  ``value`` keeps the optimum
+        (for plots); the report gives ``value: null`` unless the status is ``determined``.
     """
 
     name: str
     value: float
     stderr: float | None = None
-    ci95: tuple[float, float] | None = None
+    ci95: tuple[float | None, float | None] | None = None
     ci_method: str | None = None
     ci95_covariance: tuple[float, float] | None = None
+    status: str = "determined"
 
     @property
     def unit(self) -> str:
@@ -76,9 +86,16 @@ class Estimate:
     def symbol(self) -> str:
         return FITTED[self.name].symbol
 
+    @property
+    def determined(self) -> bool:
+        return self.status == "determined"
+
     def as_dict(self) -> dict:
-        return clean({"value": self.value, "stderr": self.stderr, "ci95": self.ci95, "unit": self.unit,
-                      "ci_method": self.ci_method, "ci95_covariance": self.ci95_covariance})
+        det = self.determined
+        return clean({"value": self.value if det else None, "stderr": self.stderr if det else None,
+                      "ci95": None if self.status == "undetermined" else self.ci95, "unit": self.unit,
+                      "status": self.status, "optimum": self.value, "ci_method": self.ci_method,
+                      "ci95_covariance": self.ci95_covariance})
 
 
 @dataclass(frozen=True)
@@ -108,6 +125,7 @@ class SlipFit:
         Dense model curve in measured units for plots (``x_loading, force_loading, x_unloading,
         force_unloading, x_onset, x_turning_point, force_turning_point``).
     warnings : tuple of str
+        Plain sentences for a lab user.
     starts : tuple of dict
         Every start (SI) and the χ² it reached.
     profile : mapping
@@ -118,6 +136,13 @@ class SlipFit:
     message : str
     raw : object
         The optimiser's result (lmfit ``MinimizerResult``); not compared, not serialised.
+    diagnostics : tuple of str
+        Solver details (kink, profiles, starts): not for the warnings.
+    split : int or None
+        First row the fitted model puts after pull-off (``None``: the data end before it).
+    autocorrelation, widening : float
+        Lag-1 autocorrelation of the residuals and the factor the intervals were widened by
+        (:mod:`.residual_checks`).
     """
 
     slip: str
@@ -140,6 +165,10 @@ class SlipFit:
     success: bool = True
     message: str = ""
     raw: Any = field(default=None, compare=False, repr=False)
+    diagnostics: tuple[str, ...] = ()
+    split: int | None = None
+    autocorrelation: float = 0.0
+    widening: float = 1.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "predicted", _readonly(self.predicted))
@@ -151,7 +180,10 @@ class SlipFit:
                       "chisqr": self.chisqr, "redchi": self.redchi, "aic": self.aic, "bic": self.bic,
                       "ndata": self.ndata, "nvarys": self.nvarys, "sigma": self.sigma,
                       "correlation_work_of_adhesion_mu_h": self.correlation, "success": self.success,
-                      "message": self.message, "warnings": list(self.warnings), "starts": list(self.starts),
+                      "message": self.message, "warnings": list(self.warnings),
+                      "diagnostics": list(self.diagnostics), "first_detached_row": self.split,
+                      "residual_autocorrelation": self.autocorrelation, "interval_widening": self.widening,
+                      "starts": list(self.starts),
                       "profile": dict(self.profile), "model_evaluations": self.n_evaluations,
                       "histories": self.n_histories})
 
@@ -191,6 +223,12 @@ class FitResult:
         The measured curve (``adhfit.data.Curve``), for plots.
     raw : mapping
         The optimiser's results per slip condition; not compared, not serialised.
+    diagnostics : tuple of str
+        Solver details (kink, profiles, starts), apart from the plain ``warnings``.
+    model : mapping
+        ``membrane`` and ``why`` (one sentence).
+    observables : tuple of str
+        The columns the fit used.
     """
 
     method: str
@@ -210,9 +248,12 @@ class FitResult:
     excluded: tuple = ()
     curve: Any = field(default=None, compare=False, repr=False)
     raw: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    diagnostics: tuple[str, ...] = ()
+    model: Mapping[str, Any] = field(default_factory=lambda: dict(MODEL))
+    observables: tuple[str, ...] = ("force",)
 
     def __post_init__(self) -> None:
-        for key in ("slip", "parameters", "fits", "provenance", "segments", "raw"):
+        for key in ("slip", "parameters", "fits", "provenance", "segments", "raw", "model"):
             object.__setattr__(self, key, MappingProxyType(dict(getattr(self, key))))
 
     @property
@@ -230,13 +271,26 @@ class FitResult:
         """The fitted nuisance parameters of the reported fit (SI)."""
         return {k: e for k, e in self.parameters.items() if k not in ("work_of_adhesion", "mu_h")}
 
+    def offsets_report(self) -> dict:
+        """``offsets`` of report.json (DESIGN.md A5b): every fitted offset in SI under its short name
+        (``force``, ``displacement``, ``pressure``), ``force`` always present (0.0 with a note when fixed)."""
+        out = {}
+        for k, e in self.offsets.items():
+            out[k.removesuffix("_offset")] = e.as_dict() | {"fitted": True}
+        if "force" not in out:
+            out["force"] = {"value": 0.0, "stderr": None, "ci95": None, "unit": "N", "status": "fixed",
+                            "fitted": False, "note": "load-cell zero fixed at 0 (fit_force_offset=False)"}
+        return out
+
     def as_dict(self) -> dict:
         """The report.json content: the A5 keys and more, no NaN (``None`` instead)."""
         return clean({
             "method": self.method, "slip": dict(self.slip),
             "parameters": {k: e.as_dict() for k, e in self.parameters.items()
                            if k in ("work_of_adhesion", "mu_h")},
-            "offsets": {k: e.as_dict() for k, e in self.offsets.items()},
+            "offsets": self.offsets_report(),
+            "model": dict(self.model), "observables": list(self.observables),
+            "diagnostics": list(self.diagnostics),
             "fits": {k: f.as_dict() for k, f in self.fits.items()},
             "correlation_work_of_adhesion_mu_h": self.correlation,
             "n_points": self.n_points, "n_excluded": self.n_excluded, "excluded": list(self.excluded),
@@ -254,8 +308,9 @@ class FitResult:
         return plot_fit(self, ax=ax, **kwargs)
 
     def _repr_html_(self) -> str:  # notebooks
-        rows = "".join(f"<tr><td>{e.symbol}</td><td>{e.value:.5g}</td><td>{e.stderr or float('nan'):.2g}"
-                       f"</td><td>{e.ci95}</td><td>{e.unit}</td></tr>" for e in self.parameters.values())
+        rows = "".join(f"<tr><td>{e.symbol}</td><td>{e.value if e.value is not None else float('nan'):.5g}"
+                       f"</td><td>{e.stderr or float('nan'):.2g}</td><td>{e.ci95} ({e.status})</td>"
+                       f"<td>{e.unit}</td></tr>" for e in self.parameters.values())
         return (f"<b>adhfit fit</b> ({self.method}); slip: {self.slip.get('verdict')}<table>"
                 f"<tr><th></th><th>value</th><th>stderr</th><th>95 %</th><th>unit</th></tr>{rows}</table>"
                 + "".join(f"<p>⚠ {w}</p>" for w in self.warnings))

@@ -7,22 +7,35 @@ same number of parameters k, so ΔAIC = ΔBIC = Δ(-2 ln L):
 * σ estimated:  -2 ln L = n ln(RSS/n) (+ const), AIC = n ln(RSS/n) + 2k, BIC = n ln(RSS/n) + k ln n;
 * σ given:      -2 ln L = χ² (+ const),          AIC = χ² + 2k,          BIC = χ² + k ln n.
 
-Evidence scale on ΔBIC (Kass & Raftery 1995, on 2 ln B): > 10 **decisive** — the better condition is
-selected; 2 – 10 **positive** — it is favoured with caution and *not* selected; < 2 **none**.
-Only a decisive difference selects: a wrong selection then needs the wrong model to win by more than
+Evidence scale on ΔBIC (Kass & Raftery 1995, on 2 ln B), the one the report prints
+(:data:`SCALE`): < 2 **cannot tell**, 2 – 6 **positive**, 6 – 10 **strong**, > 10 **very strong**.
+Only very strong evidence selects: a wrong selection then needs the wrong model to win by more than
 10, which (for models whose predictions differ by s in units of σ², Δ ~ N(s, 4s)) happens with a
-probability below 0.1 % for any s.  The verdict is one of ``"no-slip favoured"``,
-``"frictionless favoured"``, ``"the data cannot tell them apart"``.
+probability below 0.1 % for any s.  Below that the better condition is named with its evidence word
+and ``selected`` is null.  The verdict always carries the scale's word, e.g. ``"no-slip: very
+strong evidence (ΔBIC = 1071)"``; when the data cannot tell it is ``"the data cannot tell them apart"``.
 """
 from __future__ import annotations
 
 import math
 
-__all__ = ["information_criteria", "compare", "DECISIVE", "POSITIVE", "VERDICTS"]
+__all__ = ["information_criteria", "compare", "evidence_word", "DECISIVE", "POSITIVE", "STRONG", "VERDICTS", "SCALE"]
 
 DECISIVE = 10.0
 POSITIVE = 2.0
+STRONG = 6.0
 VERDICTS = ("no-slip favoured", "frictionless favoured", "the data cannot tell them apart")
+#: (lower ΔBIC, word) of the evidence scale, weakest first
+SCALE = ((0.0, "cannot tell"), (POSITIVE, "positive"), (STRONG, "strong"), (DECISIVE, "very strong"))
+
+
+def evidence_word(delta_bic: float) -> str:
+    """The scale's word for a ΔBIC (>= 0; not finite: "cannot tell")."""
+    if not math.isfinite(delta_bic) or delta_bic < POSITIVE:
+        return "cannot tell"
+    if delta_bic < STRONG:
+        return "positive"
+    return "strong" if delta_bic <= DECISIVE else "very strong"
 
 
 def information_criteria(chisqr: float, ndata: int, nvarys: int, *, sigma_given: bool) -> tuple[float, float]:
@@ -49,7 +62,7 @@ def compare(bic: dict[str, float], aic: dict[str, float]) -> dict:
         ``delta_bic`` (the other condition's minus the favoured one's, >= 0), ``thresholds``,
         ``parameters_from`` (the condition whose estimates are reported).
     """
-    thresholds = {"decisive": DECISIVE, "positive": POSITIVE, "criterion": "delta_bic"}
+    thresholds = {"decisive": DECISIVE, "strong": STRONG, "positive": POSITIVE, "criterion": "delta_bic"}
     if len(bic) == 1:
         (only,) = bic
         return {"selected": only, "verdict": f"{only} (set by the user; not compared)", "evidence": "imposed",
@@ -59,21 +72,19 @@ def compare(bic: dict[str, float], aic: dict[str, float]) -> dict:
     best, other = ranked[0], ranked[1]
     d_bic = bic[other] - bic[best]
     d_aic = aic[other] - aic[best]
-    if not math.isfinite(d_bic):
-        evidence = "none"
-    elif d_bic > DECISIVE:
-        evidence = "decisive"
-    elif d_bic >= POSITIVE:
-        evidence = "positive"
+    word = evidence_word(d_bic)
+    selected = best if word == "very strong" else None
+    if word == "cannot tell":
+        verdict = VERDICTS[2]
+        explanation = f"ΔBIC = {d_bic:.1f} < {POSITIVE:g}: the data cannot tell the slip conditions apart."
+    elif selected:
+        verdict = f"{best}: very strong evidence (ΔBIC = {d_bic:.3g})"
+        explanation = f"ΔBIC = {d_bic:.1f} > {DECISIVE:g}: very strong evidence for {best}, which is selected."
     else:
-        evidence = "none"
-    selected = best if evidence == "decisive" else None
-    verdict = f"{best} favoured" if selected else VERDICTS[2]
-    explanation = {
-        "decisive": f"ΔBIC = {d_bic:.1f} > {DECISIVE:g}: {best} is selected.",
-        "positive": f"ΔBIC = {d_bic:.1f} in [{POSITIVE:g}, {DECISIVE:g}]: {best} is favoured with caution, "
-                    f"not selected.",
-        "none": f"ΔBIC = {d_bic:.1f} < {POSITIVE:g}: no preference."}[evidence]
-    return {"selected": selected, "verdict": verdict, "evidence": evidence, "favoured": best,
+        verdict = f"{best}: {word} evidence, not selected (ΔBIC = {d_bic:.2g})"
+        explanation = (f"ΔBIC = {d_bic:.1f}: {word} evidence for {best}; only ΔBIC > {DECISIVE:g} (very strong) "
+                       f"selects a slip condition.")
+    return {"selected": selected, "verdict": verdict, "evidence": word, "favoured": best,
             "delta_aic": d_aic, "delta_bic": d_bic, "explanation": explanation, "thresholds": thresholds,
+            "scale": [{"delta_bic_from": lo, "word": w} for lo, w in SCALE],
             "parameters_from": best}

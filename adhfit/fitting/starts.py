@@ -41,26 +41,34 @@ def noise_estimate(force: np.ndarray) -> float:
 def contact_offset(x: np.ndarray, force: np.ndarray, i_turn: int, sigma: float = 0.0) -> float:
     """Offset that puts the contact point at δ = 0 (minus the measured control value at contact).
 
-    With rows before contact (forces within 3σ of zero at the start), contact is placed between the
-    last such row and the next; otherwise a straight line through the loading rows with forces
-    between 5 % and 30 % of the largest force is extrapolated to zero force.
+    A hinge is fitted by linear least squares to the loading rows below half the largest force:
+    F = c + a·h + b·h², h = max(x - x_c, 0), for every candidate contact point x_c between two rows
+    (and before the first); the x_c with the least squared residual wins.  Unlike a threshold on the
+    force (which at a few per cent noise places contact many rows late), the fit uses every row and
+    stays unbiased at 5 % noise.  ``sigma`` is accepted for backward compatibility.
     """
+    return -hinge_contact(x, force, i_turn)[0]
+
+
+def hinge_contact(x: np.ndarray, force: np.ndarray, i_turn: int) -> tuple[float, float]:
+    """(x_c, c): contact point (measured units) and force level before contact of the hinge fit
+    (see :func:`contact_offset`)."""
     xl, fl = np.asarray(x[: i_turn + 1], float), np.asarray(force[: i_turn + 1], float)
     f_max = float(fl.max())
-    level = max(3.0 * sigma, 0.01 * f_max)
-    above = fl > level
-    # the last loading row still at zero force, counting from the end of loading back
-    low = np.flatnonzero(~above)
-    if low.size >= 2 and low[0] == 0:
-        k = int(low[-1])
-        return -float(0.5 * (xl[k] + xl[min(k + 1, xl.size - 1)]))
-    band = (fl > 0.05 * f_max) & (fl < 0.3 * f_max)
-    if band.sum() >= 2:
-        slope, icpt = np.polyfit(xl[band], fl[band], 1)
-        if slope > 0:
-            return -float(-icpt / slope)
-    first = np.flatnonzero(above)
-    return -float(xl[first[0]] if first.size else xl[0])
+    above = np.flatnonzero(fl > 0.5 * f_max)
+    end = max(int(above[0]) if above.size else xl.size, min(6, xl.size))
+    xs, fs = xl[:end], fl[:end]
+    span = float(xs[-1] - xs[0]) or 1.0
+    cands = np.concatenate([[xs[0] - 0.05 * span], 0.5 * (xs[1:] + xs[:-1])])
+    best, out = np.inf, (float(xs[0]), 0.0)
+    for xc in cands[: max(xs.size - 3, 1)]:
+        h = np.clip(xs - xc, 0.0, None) / span
+        design = np.column_stack([np.ones_like(h), h, h * h])
+        coef, *_ = np.linalg.lstsq(design, fs, rcond=None)
+        r = fs - design @ coef
+        if float(r @ r) < best and coef[1] + 2 * coef[2] > 0:
+            best, out = float(r @ r), (float(xc), float(coef[0]))
+    return out
 
 
 def _roots_log(g, lo: float, hi: float, n: int = 13) -> list[float]:
@@ -93,12 +101,12 @@ def _roots_log(g, lo: float, hi: float, n: int = 13) -> list[float]:
     return roots
 
 
-def _best(model: CurveModel, candidates: list[dict], rows: np.ndarray) -> dict | None:
+def _best(model: CurveModel, candidates: list[dict], rows: np.ndarray, f0: float = 0.0) -> dict | None:
     """The candidate parameter set with the least squared residual over ``rows``."""
     best, cost = None, np.inf
     for c in candidates:
         try:
-            r = model.predict(c["work_of_adhesion"], c["mu_h"], c["x_offset"])[rows] - model.force[rows]
+            r = model.predict(c["work_of_adhesion"], c["mu_h"], c["x_offset"], f0)[rows] - model.force[rows]
         except ModelDomainError:
             continue
         if float(r @ r) < cost:
@@ -106,7 +114,7 @@ def _best(model: CurveModel, candidates: list[dict], rows: np.ndarray) -> dict |
     return best
 
 
-def data_start(model: CurveModel, *, fit_offset: bool) -> Start:
+def data_start(model: CurveModel, *, fit_offset: bool, fit_force_offset: bool = False) -> Start:
     """Start values for one slip condition from the data (see the module docstring).
 
     Raises
@@ -114,10 +122,11 @@ def data_start(model: CurveModel, *, fit_offset: bool) -> Start:
     ModelDomainError
         No μh in a wide range gives a history that reaches the data's largest control value.
     """
-    x, force, seg = model.x, model.force, model.segments
+    x, seg = model.x, model.segments
+    f0 = force_zero(x, model.force, seg.i_turn) if fit_force_offset else 0.0
+    force = model.force - f0
     b = model.scene.membrane_radius
-    off = contact_offset(x, force, seg.i_turn, noise_estimate(force)) \
-        if (fit_offset and model.control == "displacement") else 0.0
+    off = contact_offset(x, force, seg.i_turn) if (fit_offset and model.control == "displacement") else 0.0
     f_max = float(force[seg.i_turn])
     w_probe = 0.1
 
@@ -128,12 +137,14 @@ def data_start(model: CurveModel, *, fit_offset: bool) -> Start:
     mu_scale = f_max / (2.0 * b * 0.3)  # f ~ 0.3 at the end of a typical loading
     mus = _roots_log(stiffness, mu_scale / 300.0, mu_scale * 300.0, n=17)
     start = _best(model, [{"work_of_adhesion": w_probe * m, "mu_h": m, "x_offset": off} for m in mus],
-                  seg.loading)
+                  seg.loading, f0)
     if start is None:
         raise ModelDomainError("no start value of mu_h reaches the data's largest control value",
                                {"x_max": model.x_max})
     mu = start["mu_h"]
-    f_min = float(force[seg.i_turn:].min())
+    # the most negative force of the way out, smoothed over 5 rows (a single noisy row overshoots)
+    tail = force[seg.i_turn:]
+    f_min = float(np.convolve(tail, np.ones(5) / 5, mode="valid").min()) if tail.size >= 5 else float(tail.min())
     ws = [0.1]
     if f_min < 0:
         def pull_off(w):
@@ -143,6 +154,11 @@ def data_start(model: CurveModel, *, fit_offset: bool) -> Start:
             return model.scene.scales(mu).from_f(f_po) / f_min - 1.0
         ws = _roots_log(pull_off, 1e-3, 10.0, n=13) or [0.1]
     best = _best(model, [{"work_of_adhesion": w * mu, "mu_h": mu, "x_offset": off} for w in ws],
-                 np.ones(len(force), bool))
+                 np.ones(len(force), bool), f0)
     w_ad = best["work_of_adhesion"] if best is not None else 0.1 * mu
-    return Start(work_of_adhesion=w_ad, mu_h=mu, x_offset=off, force_offset=0.0)
+    return Start(work_of_adhesion=w_ad, mu_h=mu, x_offset=off, force_offset=f0)
+
+
+def force_zero(x: np.ndarray, force: np.ndarray, i_turn: int) -> float:
+    """Start value of the load-cell zero (N): the force level before contact from the hinge fit."""
+    return hinge_contact(x, force, i_turn)[1]

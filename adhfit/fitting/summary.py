@@ -16,7 +16,8 @@ from scipy import stats
 
 from .lsq import RawFit, residual_function
 from .model import ModelDomainError
-from .profile import profile_interval
+from .profile import one_side, profile_interval
+from .residual_checks import correlation_factor, widen, zero_drift
 from .result import Estimate, SlipFit
 from .selection import information_criteria
 from .starts import noise_estimate
@@ -29,6 +30,8 @@ INTERNAL = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h", "displ
 #: profile and covariance half-widths differing by more than this fraction earn a warning
 DISAGREE = 0.25
 Z95 = float(stats.norm.ppf(0.975))
+#: standard error of ln W_ad or ln μh above which the covariance says nothing (a factor e^1.5·1.96 ≈ 20)
+MAX_LOG_SE = 1.5
 
 
 def _estimates(raw: RawFit, profiles: dict) -> dict[str, Estimate]:
@@ -41,14 +44,33 @@ def _estimates(raw: RawFit, profiles: dict) -> dict[str, Estimate]:
         value = si[name] if name in si else si["x_offset"]  # displacement_offset, pressure_offset
         factor = value if log else (par.x_scale if name != "force_offset" else par.f_scale)
         se_int = p.stderr if (p.stderr is not None and np.isfinite(p.stderr) and p.stderr > 0) else None
-        back = (lambda t: math.exp(t)) if log else (lambda t, f=factor: t * f)
+        back = (lambda t: math.exp(min(t, 700.0))) if log else (lambda t, f=factor: t * f)
+        if log and se_int is not None and se_int > MAX_LOG_SE:  # a factor > 20 either way: not a number
+            se_int = None
         cov_ci = (back(p.value - Z95 * se_int), back(p.value + Z95 * se_int)) if se_int else None
         ci, method = cov_ci, ("covariance" if cov_ci else None)
+        status = "determined" if cov_ci else "undetermined"
         prof = profiles.get(name)
-        if prof is not None and prof[0].converged and prof[1].converged:
-            ci, method = (back(prof[0].value), back(prof[1].value)), "profile"
-        out[name] = Estimate(name, value, se_int * factor if se_int else None, ci, method, cov_ci)
+        if prof is not None:
+            ci, method, status = _from_profile(prof, back, ci, method, status)
+        out[name] = Estimate(name, value, se_int * factor if se_int else None, ci, method, cov_ci, status)
     return out
+
+
+def _from_profile(prof, back, ci, method, status):
+    """(ci95, method, status) from a profile's two sides (DESIGN.md A5b)."""
+    lo, hi = prof
+    if lo.open and hi.open:
+        return None, "profile", "undetermined"
+    if hi.open:
+        return ((back(lo.bound), None), "profile (one-sided 95 %)", "lower_bound") if lo.bound is not None \
+            else (None, "profile", "undetermined")
+    if lo.open:
+        return ((None, back(hi.bound)), "profile (one-sided 95 %)", "upper_bound") if hi.bound is not None \
+            else (None, "profile", "undetermined")
+    if lo.bound is not None and hi.bound is not None:
+        return (back(lo.bound), back(hi.bound)), "profile", "determined"
+    return ci, method, status
 
 
 def _model_curve(raw: RawFit) -> dict:
@@ -72,41 +94,65 @@ def _model_curve(raw: RawFit) -> dict:
             "force_turning_point": float(sc.from_f(pcs.f_tp)) + f0}
 
 
-def _warnings(raw: RawFit, est: dict, profiles: dict, curve: dict, sigma: float) -> list[str]:
+_PLAIN = {"work_of_adhesion": "W_ad", "mu_h": "μh"}
+
+
+def _diagnostics(raw: RawFit, est: dict, profiles: dict) -> list[str]:
+    """Solver details (for the report's diagnostics part, not for the warnings)."""
     m, best, si = raw.model, raw.best, raw.par.si(raw.best.params)
     out = []
     if best.covar is None or any(e.stderr is None for e in est.values()):
-        out.append("standard errors could not be estimated (singular covariance): a parameter is not "
-                   "determined by these data")
+        out.append("singular covariance: standard errors could not be estimated for every parameter")
     if m.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"]):
         out.append("optimum on the kink: a measured row sits at (or beyond) the model's turning point, "
                    "where dF/dx is infinite; covariance errors are fragile there (check the profile intervals)")
     for name, (lo, hi) in profiles.items():
         e = est[name]
-        if not (lo.converged and hi.converged):
+        if lo.open or hi.open:
+            out.append(f"the likelihood profile of {name} stays below the critical value on one side "
+                       f"(to the parameter's bound or the model's domain): status {e.status}")
+        elif not (lo.converged and hi.converged):
             out.append(f"the likelihood profile of {name} did not converge; its interval is from the covariance")
-        elif e.ci95_covariance is not None:
+        elif e.ci95_covariance is not None and e.ci95 is not None and None not in e.ci95:
             w_p, w_c = math.log(e.ci95[1] / e.ci95[0]), math.log(e.ci95_covariance[1] / e.ci95_covariance[0])
-            if abs(w_p / w_c - 1.0) > DISAGREE:
+            if w_p > 0 and abs(w_p / w_c - 1.0) > DISAGREE:
                 out.append(f"{name}: the covariance interval is {w_c / w_p:.2g} times the likelihood-profile "
                            f"width; the profile interval is reported")
         if lo.better_optimum or hi.better_optimum:
             out.append(f"the profile of {name} found a lower χ² than the optimum: the fit may not have converged")
+    out += [f"start {i}: χ² = {st['chisqr']:.6g}" for i, st in enumerate(raw.starts)]
+    return out
+
+
+def _warnings(raw: RawFit, est: dict, sigma: float, rho: float, factor: float, split) -> list[str]:
+    """Plain sentences a lab user understands (DESIGN.md A5b)."""
+    m, best = raw.model, raw.best
+    out = []
+    for name, e in est.items():
+        label = _PLAIN.get(name, name)
+        if e.status == "lower_bound":
+            why = (" (the unloading stops before the membrane starts to peel off, so the pull-off that "
+                   "sets W_ad is never reached)" if name == "work_of_adhesion" else "")
+            out.append(f"The data only bound {label} from below{why}: {label} ≥ {e.ci95[0]:.3g} {e.unit} "
+                       f"(one-sided 95 %); no value is reported.")
+        elif e.status == "upper_bound":
+            out.append(f"The data only bound {label} from above: {label} ≤ {e.ci95[1]:.3g} {e.unit} "
+                       f"(one-sided 95 %); no value is reported.")
+        elif e.status == "undetermined" and name in _PLAIN:
+            out.append(f"The data do not determine {label}: no value or interval is reported.")
+    if factor > 1.0:
+        out.append(f"The force noise is correlated from row to row (lag-1 autocorrelation {rho:.2f}): the rows "
+                   f"are denser than the noise is independent, so the intervals were widened {factor:.2g}-fold "
+                   f"(about {100 / factor ** 2:.0f} % of the rows count as independent).")
     noise = noise_estimate(m.force)
-    if noise > 0 and sigma > 2.0 * noise:
-        out.append(f"poor fit: the residuals (σ = {sigma:.3g} N) are {sigma / noise:.2g} times the "
-                   f"row-to-row noise ({noise:.3g} N): the model misses systematic features of the data")
+    if factor == 1.0 and noise > 0 and sigma > 2.0 * noise:
+        out.append(f"The model does not follow the data to within the noise: the residuals ({sigma * 1e3:.3g} mN) "
+                   f"are {sigma / noise:.2g} times the row-to-row scatter ({noise * 1e3:.3g} mN). Check the scene "
+                   f"(geometry, pressure or gap), the units and the slip condition.")
     if raw.sigma_given and best.redchi > 1.0 + 4.0 * math.sqrt(2.0 / max(best.nfree, 1)):
-        out.append(f"poor fit: reduced χ² = {best.redchi:.3g} with the given σ")
-    if m.segments.i_jump is None:
-        out.append("the data end before pull-off (no detachment jump found): W_ad rests on the unloading "
-                   "curve alone")
-    att = m.segments.attached
-    if curve and att.any() and m.segments.i_jump is None:
-        x_last = float(np.min(m.x[att]))
-        if x_last > curve["x_onset"]:
-            out.append("the data never reach delamination (the unloading stops before the model's onset): "
-                       "W_ad is only bounded from below")
+        out.append(f"The model does not fit to the given noise level: reduced χ² = {best.redchi:.3g}.")
+    if split is None and est["work_of_adhesion"].status == "determined":
+        out.append("The data end before pull-off: W_ad rests on the unloading curve alone.")
     return out
 
 
@@ -118,13 +164,22 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
     profiles = {}
     if profile:  # without a covariance the profile still works, from a 10 % first step
         for name in ("work_of_adhesion", "mu_h"):
-            profiles[name] = profile_interval(residual, best, INTERNAL[name], sigma_given=raw.sigma_given)
+            lo, hi = profile_interval(residual, best, INTERNAL[name], sigma_given=raw.sigma_given)
+            if hi.open != lo.open:  # one side only: its one-sided 95 % bound (the two-sided 90 % limit)
+                d = -1.0 if hi.open else 1.0
+                side = one_side(residual, best, INTERNAL[name], d, sigma_given=raw.sigma_given)
+                if side.bound is not None:
+                    lo, hi = (side, hi) if hi.open else (lo, side)
+            profiles[name] = (lo, hi)
     est = _estimates(raw, profiles)
     si = par.si(best.params)
     try:
         predicted = m.predict(si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"])
+        split = m.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
     except ModelDomainError:
-        predicted = np.full(m.force.shape, np.nan)
+        predicted, split = np.full(m.force.shape, np.nan), None
+    rho, factor = correlation_factor(m.force - predicted)
+    est = {k: widen(e, factor) for k, e in est.items()}
     curve = _model_curve(raw)
     aic, bic = information_criteria(best.chisqr, best.ndata, best.nvarys, sigma_given=raw.sigma_given)
     # χ² in units of σ²: the given σ, or the robust row-to-row noise (σ estimated)
@@ -135,11 +190,32 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
         c = best.covar
         corr = float(c[0, 1] / math.sqrt(c[0, 0] * c[1, 1])) if c[0, 0] > 0 and c[1, 1] > 0 else None
     prof_info = {k: {"subfits": lo.n_subfits + hi.n_subfits, "evaluations": lo.nfev + hi.nfev,
-                     "converged": [lo.converged, hi.converged]} for k, (lo, hi) in profiles.items()}
+                     "converged": [lo.converged, hi.converged], "open": [lo.open, hi.open]}
+                 for k, (lo, hi) in profiles.items()}
+    warn = _warnings(raw, est, sigma, rho, factor, split)
+    drift = _drift(raw, si, predicted, sigma, split)
+    if drift:
+        warn.append(drift)
     return SlipFit(slip=raw.slip, parameters=est, chisqr=chisqr, redchi=chisqr / max(best.nfree, 1),
                    aic=aic, bic=bic, ndata=int(best.ndata), nvarys=int(best.nvarys), sigma=float(sigma),
                    correlation=corr, predicted=predicted, model_curve=curve,
-                   warnings=tuple(_warnings(raw, est, profiles, curve, sigma)), starts=tuple(raw.starts),
+                   warnings=tuple(warn), starts=tuple(raw.starts),
                    profile=prof_info, n_evaluations=m.n_evaluations, n_histories=m.n_histories,
-                   success=bool(best.success), message=str(best.message), raw=best)
+                   success=bool(best.success), message=str(best.message), raw=best,
+                   diagnostics=tuple(_diagnostics(raw, est, profiles)), split=split,
+                   autocorrelation=rho, widening=factor)
 
+
+def _drift(raw: RawFit, si: dict, predicted: np.ndarray, sigma: float, split) -> str | None:
+    """The zero-drift warning (:func:`.residual_checks.zero_drift`) from the rows at zero model force."""
+    m = raw.model
+    if split is None or not np.all(np.isfinite(predicted)):
+        return None
+    try:
+        pcs = m.pieces(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+    except ModelDomainError:
+        return None
+    xd = m.dimensionless_x(si["mu_h"], si["x_offset"])
+    before = m.segments.loading & (xd < pcs.x_contact)
+    after = np.arange(m.x.size) >= split
+    return zero_drift(m.force - predicted, before, after, sigma, float(np.max(np.abs(m.force))))
