@@ -83,12 +83,12 @@ def test_recovery_reduced():
 
 def test_right_slip_at_low_noise():
     """At 0.5 % noise the two conditions differ by ΔBIC ≫ 10: the right one is selected, and W_ad, μh
-    are within 3 % (about 10 standard errors at this noise: a fit that lands elsewhere is wrong)."""
-    for case, slip in (("displacement-curved", "no-slip"), ("pressure-curved", "frictionless")):
-        r = _run(case, slip, 0.005)
-        assert r["slip_outcome"] == "right", (case, slip, r["selected"], r["delta_bic"])
-        for name in rs.PARAMS:
-            assert abs(r[name]["rel_err"]) < 0.03, (case, slip, name, r[name])
+    are within 3 % (about 10 standard errors at this noise: a fit that lands elsewhere is wrong).
+    Pressure control, frictionless (the high-noise test below is displacement control, no slip)."""
+    r = _run("pressure-curved", "frictionless", 0.005)
+    assert r["slip_outcome"] == "right", (r["selected"], r["delta_bic"])
+    for name in rs.PARAMS:
+        assert abs(r[name]["rel_err"]) < 0.03, (name, r[name])
 
 
 def test_slip_undecidable_at_high_noise():
