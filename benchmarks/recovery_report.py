@@ -73,6 +73,22 @@ def _errors(out: dict) -> str:
     return "Fits that raised (message: count):\n\n" + "\n".join(f"- `{m}`: {n}" for m, n in seen.items()) + "\n"
 
 
+def _bounds(out: dict) -> str:
+    """Per variant: how tight the one-sided W_ad bounds are, against the largest G the test reached."""
+    lines = []
+    for variant in dict.fromkeys(r["variant"] for r in out["replicates"]):
+        rr = [r for r in out["replicates"] if r["variant"] == variant
+              and r["work_of_adhesion"]["status"] == "lower_bound"]
+        if rr:
+            t = rr[0]["truth"]["work_of_adhesion"]
+            ratio = sorted(r["work_of_adhesion"]["lo"] / t for r in rr)
+            g = sorted(r["truth"]["G_max_reached"] / t for r in rr)
+            lines.append(f"- {variant}: {len(rr)} lower bounds, bound/truth median {ratio[len(ratio) // 2]:.3f} "
+                         f"(range {ratio[0]:.3f}–{ratio[-1]:.3f}); largest G reached/truth median "
+                         f"{g[len(g) // 2]:.3f}")
+    return ("W_ad reported as a lower bound:\n\n" + "\n".join(lines) + "\n") if lines else "No lower bounds.\n"
+
+
 def _duplicates(out: dict) -> str:
     dup = [c for c in out["cells"] if c["variant"] == "duplicated"]
     if not dup:
@@ -97,5 +113,6 @@ def write_markdown(out: dict, path: Path) -> None:
             "where pull-off ends pinning); duplicated (every row twice).\n", LEGEND,
             "## Pooled over cases and slip conditions\n", table(out["pooled"], ("variant", "noise")), "",
             "## Per case\n", table(out["cells"], ("case", "slip", "variant", "noise")), "",
-            "## Failures\n", _errors(out), "## Duplicated rows\n", _duplicates(out)]
+            "## Failures\n", _errors(out), "## Duplicated rows\n", _duplicates(out),
+            "## One-sided bounds\n", _bounds(out)]
     path.write_text("\n".join(text), encoding="utf-8")
