@@ -2,7 +2,12 @@
 
 Fitted parameters (rows of :data:`adhfit.params.FITTED`): ``work_of_adhesion`` and ``mu_h``, plus the
 nuisance ``displacement_offset`` (on by default under displacement control) or ``pressure_offset``
-(off by default) and ``force_offset`` (off by default).
+(off by default) and ``force_offset`` (the load-cell zero, on by default: the rows before contact
+and after pull-off pin it).
+
+* **Two stages**: the free-split model (:class:`~.model.CurveModel`) finds the detachment row by
+  likelihood; then the split is fixed at that row and its neighbours, each refitted with the
+  pull-off position term, and the lowest χ² wins (:func:`_refit_fixed`).
 
 * **Parametrisation**: the optimiser sees ln W_ad, ln μh, the offset over the data's control range
   and the force offset over the largest force, so every internal parameter is O(1) and its
@@ -283,6 +288,7 @@ def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base:
     m, par, f = raw.model, raw.par, raw.model.force
     seg = Segments(n=m.segments.n, i_turn=m.segments.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
     fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True)
+    fixed.n_histories, fixed.n_evaluations = m.n_histories, m.n_evaluations  # the cost of stage 1 too
     residual = residual_function(fixed, par, raw.scale, sigma_est)
     best, starts = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None)
     return RawFit(slip=m.slip, best=best, model=fixed, par=par, scale=raw.scale,

@@ -287,6 +287,7 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     seed : int
         Root seed; ensemble k uses the k-th child of ``SeedSequence(seed)``.
     n_walkers, n_ensembles : int
+        ``n_walkers`` is raised to 2·ndim when smaller (emcee's differential-evolution move needs it).
     tune_steps : int
         Steps with the least-squares proposal before it is refitted (always discarded).
     check_every : int
@@ -311,6 +312,9 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     fn = pmap.register(target)
     evals0 = pmap.n_evaluations
     ndim = target.ndim
+    # emcee's differential-evolution move needs at least 2·ndim walkers (the load-cell zero, fitted by
+    # default, makes ndim 4)
+    n_walkers = max(int(n_walkers), 2 * ndim)
     children = np.random.SeedSequence(seed).spawn(n_ensembles)
     seeds = [int(c.generate_state(1)[0]) for c in children]
     cov0 = np.atleast_2d(np.asarray(cov0, float))

@@ -70,7 +70,9 @@ class McmcFitResult(FitResult):
         d = super().as_dict()
         d.update(clean({"seed": self.mcmc.get("seed"), "converged": self.converged,
                         "model_probabilities": self.mcmc.get("model_probabilities", {}).get("probabilities"),
-                        "diagnostics": {s: v["diagnostics"] for s, v in self.mcmc.get("slips", {}).items()},
+                        # the sampler's diagnostics per slip condition (kept), plus the solver notes list
+                        "diagnostics": {s: v["diagnostics"] for s, v in self.mcmc.get("slips", {}).items()}
+                        | {"notes": list(self.diagnostics)},
                         "mcmc": dict(self.mcmc)}))
         return d
 

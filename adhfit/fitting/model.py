@@ -5,23 +5,25 @@ A measured curve is a history: loading (the control variable rises to its larges
 
 * **loading rows** (``0 .. i_turn``): zero force before contact (δ < 0 under displacement control,
   p < p_cr under pressure control), then the making-contact branch;
-* **attached unloading rows** (after ``i_turn``, before the measured detachment jump): contact pinning
-  then delamination, down to the turning point of the control variable (least δ or least p);
-  a row whose control value lies beyond the model's turning point is given the turning-point force
-  (a clamp that keeps the residual continuous in the parameters while the model and the data
-  disagree about where pull-off happens);
-* **detached rows** (from the measured jump on): the free membrane, zero force.
+* **unloading rows** (after ``i_turn``): contact pinning then delamination down to the turning point
+  of the control variable (least δ or least p), then the free membrane (zero force).  By default
+  (**free split**) the model itself decides which rows are detached: a row is detached once the
+  control value, in row order, has passed the model's turning point, with a linear ramp one row
+  spacing wide so that χ² stays continuous (:meth:`CurveModel.attached_weight`).  Where pull-off
+  happened is then weighed by the likelihood, not found by a threshold on the data: at 4 % force
+  noise the jump is only 3–4 row-to-row noise steps high and a 6-σ detector missed it in 14 of 15
+  curves, which biased W_ad by -30 % (DESIGN.md B4).
+* With a **fixed split** (``fixed_split=True``: the rows of ``segments``) the rows before the jump are
+  attached; one beyond the model's turning point is given the turning-point force (a clamp that keeps
+  the residual continuous), and the measured pull-off position enters as one more residual
+  (:attr:`CurveModel.jump`, σ = spacing/√12: the jump happened somewhere between two rows).  The fit
+  uses it as a second stage, at the row the free split found (:mod:`.lsq`): the free split's ramp
+  would place pull-off to a fraction of a row when the jump is large against the noise.
 
-Where the jump happened is itself a measurement of the model's turning point: it lies between the
-last attached row and the first detached row (:attr:`CurveModel.jump`).  The fit adds it as one
-more residual (see :mod:`.lsq`).  Without it the pull-off position would only enter through the
-clamp, and a model that detaches later than the data would cost nothing: under pressure control on a
-flat substrate, where delamination is unstable from its onset, W_ad would then be unidentifiable.
-
-The segments are found by **row order**, never by control value (rows just before and just after
-the jump may share a displacement): :func:`segment` finds the end of loading (``Curve.i_turn``) and the
-detachment jump (the largest rise of the force toward zero after the most negative force, kept
-only when it is large against the noise and the force after it is near zero).
+:func:`segment` still finds the end of loading (``Curve.i_turn``, by **row order**, never by control
+value: rows just before and just after the jump may share a displacement) and a detected jump (the
+largest rise of the force toward zero after the most negative force, kept only when it is large
+against the noise), which is now only a first guess for reports.
 
 For each parameter set one history is computed with :func:`adhfit.simulate` (``points`` rows), ending
 the loading at the data's largest control value, and the force is interpolated along its monotone
@@ -42,6 +44,7 @@ from scipy.interpolate import PchipInterpolator
 from ..errors import AdhfitError, InputError
 from ..simulation import simulate
 from .options import DEFAULT_POINTS
+from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
            "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS"]
@@ -53,105 +56,12 @@ OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offs
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
 #: succeed at a neighbouring one; the interpolants differ by ~1e-4 of the force, far below the noise)
 RETRY_POINTS = (0, 7, 19)
-#: a jump must exceed this fraction of the most negative force ...
-JUMP_FRACTION = 0.3
-#: ... and this many robust standard deviations of the row-to-row force changes
-JUMP_NOISE = 6.0
-
-
 class ModelDomainError(AdhfitError, ValueError):
     """The parameters leave the model's domain (the history cannot be computed)."""
 
     def __init__(self, message: str, params: dict) -> None:
         self.params = dict(params)
         super().__init__(f"{message} (at {', '.join(f'{k}={v:.6g}' for k, v in self.params.items())})")
-
-
-# ----------------------------------------------------------------------------------------------
-# segmentation of the measured rows
-
-
-@dataclass(frozen=True)
-class Segments:
-    """Row-order segments of a measured curve.
-
-    Attributes
-    ----------
-    n : int
-        Number of rows.
-    i_turn : int
-        Last loading row (largest control value, first occurrence).
-    i_jump : int or None
-        First row after the detachment jump (model force zero from here on); ``None`` when the data
-        end before pull-off.
-    jump : float
-        Size of the detected jump, N (0 when none).
-    """
-
-    n: int
-    i_turn: int
-    i_jump: int | None
-    jump: float = 0.0
-
-    def _mask(self, lo: int, hi: int) -> np.ndarray:
-        m = np.zeros(self.n, bool)
-        m[lo:hi] = True
-        return m
-
-    @property
-    def loading(self) -> np.ndarray:
-        """Boolean mask of the loading rows (the turning row included)."""
-        return self._mask(0, self.i_turn + 1)
-
-    @property
-    def attached(self) -> np.ndarray:
-        """Boolean mask of the unloading rows before the detachment jump."""
-        return self._mask(self.i_turn + 1, self.n if self.i_jump is None else self.i_jump)
-
-    @property
-    def detached(self) -> np.ndarray:
-        """Boolean mask of the rows after the jump (free membrane)."""
-        return self._mask(self.n if self.i_jump is None else self.i_jump, self.n)
-
-    def as_dict(self) -> dict:
-        return {"i_turn": self.i_turn, "i_jump": self.i_jump, "jump": self.jump,
-                "n_loading": int(self.loading.sum()), "n_attached": int(self.attached.sum()),
-                "n_detached": int(self.detached.sum())}
-
-
-def detect_jump(force: np.ndarray, i_turn: int) -> tuple[int | None, float]:
-    """First row after the detachment jump, and the jump's size (N).
-
-    The jump is the largest rise of the force between consecutive rows after the most negative force
-    of the unloading rows.  It is accepted only if it exceeds ``JUMP_FRACTION`` of that force and
-    ``JUMP_NOISE`` robust standard deviations (median absolute deviation) of the row-to-row changes,
-    and if the force after it is closer to zero than to the force before it.
-
-    Returns
-    -------
-    (i_jump, size) : (int or None, float)
-        ``(None, 0.0)`` when the data end before pull-off.
-    """
-    f = np.asarray(force, float)
-    i_min = i_turn + int(np.argmin(f[i_turn:]))
-    if f[i_min] >= 0.0 or i_min >= f.size - 1:
-        return None, 0.0
-    steps = np.diff(f[i_min:])
-    k = int(np.argmax(steps))
-    size = float(steps[k])
-    all_steps = np.diff(f[i_turn:])
-    noise = 1.4826 * float(np.median(np.abs(all_steps - np.median(all_steps))))
-    before, after = f[i_min + k], float(np.median(f[i_min + k + 1:]))
-    if size > JUMP_FRACTION * abs(f[i_min]) and size > JUMP_NOISE * noise \
-            and abs(after) < 0.5 * abs(before):
-        return i_min + k + 1, size
-    return None, 0.0
-
-
-def segment(curve) -> Segments:
-    """Segment a :class:`~adhfit.data.Curve` by row order (loading, attached, detached)."""
-    i_jump, size = detect_jump(curve.force, curve.i_turn)
-    return Segments(n=len(curve.x), i_turn=int(curve.i_turn), i_jump=i_jump, jump=size)
 
 
 # ----------------------------------------------------------------------------------------------
