@@ -70,7 +70,8 @@ def plan(args) -> list[dict]:
                     n = args.replicates if head else args.replicates_other
                     jobs += [{"case": case, "slip": slip, "variant": variant, "noise": noise, "rep": k,
                               "seed": args.seed, "method": args.method} for k in range(n)]
-    return jobs
+    # replicate 0 of every cell first, then replicate 1, ...: any prefix of the run is balanced
+    return sorted(jobs, key=lambda j: j["rep"])
 
 
 def _fit(path: Path, scene, method: str, seed: int) -> dict:
@@ -117,34 +118,56 @@ def _git(*cmd: str) -> str | None:
         return None
 
 
-def provenance(argv: list[str], wall: float, workers: int) -> dict:
+def provenance(argv: list[str], wall: float | None, workers: int) -> dict:
     import adhfit  # noqa: PLC0415
     dirty = bool(_git("status", "--porcelain", "--", "adhfit"))
     return {"command": "python benchmarks/recovery.py " + " ".join(argv),
             "commit": (_git("rev-parse", "--short", "HEAD") or "?") + ("+dirty" if dirty else ""),
             "trust_commit": _git("rev-parse", "--short", "trust"), "adhfit": adhfit.__version__,
-            "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "wall_s": round(wall, 1),
+            "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+            "wall_s": None if wall is None else round(wall, 1),
             "workers": workers, "python": platform.python_version(), "numpy": np.__version__,
             "nproc": os.cpu_count()}
 
 
-def run(args, argv: list[str]) -> dict:
-    """Run the plan (in ``--workers`` processes), summarise, write OUT.json / OUT.md / OUT.png."""
+def _execute(args) -> tuple[list[dict], float]:
+    """Run the plan; every record is also appended to OUT.partial.jsonl as it completes."""
     jobs = plan(args)
     t0 = time.perf_counter()
     records = []
+    partial = Path(args.out).with_suffix(".partial.jsonl")
+    partial.parent.mkdir(parents=True, exist_ok=True)
+    partial.write_text("", encoding="utf-8")
     pool = ProcessPoolExecutor(max_workers=args.workers) if args.workers > 1 else None
     try:
         results = pool.map(run_one, jobs, chunksize=1) if pool else map(run_one, jobs)
         for k, rec in enumerate(results, 1):
             records.append(rec)
+            with partial.open("a", encoding="utf-8") as fh:
+                fh.write(json.dumps(rec, default=str) + "\n")
             print(f"[{k}/{len(jobs)} {time.perf_counter() - t0:.0f} s] {rec['case']} {rec['slip']} "
                   f"{rec['variant']} {100 * rec['noise']:g} % #{rec['rep']}: W {rec['work_of_adhesion']['status']} "
                   f"{rec['work_of_adhesion']['covered']}, slip {rec['slip_outcome']}", file=sys.stderr, flush=True)
     finally:
         if pool:
             pool.shutdown()
-    out = {"provenance": provenance(argv, time.perf_counter() - t0, args.workers),
+    return records, time.perf_counter() - t0
+
+
+def run(args, argv: list[str]) -> dict:
+    """Run the plan (in ``--workers`` processes), summarise, write OUT.json / OUT.md / OUT.png.
+
+    With ``--from-records FILE`` (a ``.partial.jsonl`` of an interrupted run) nothing is fitted: the
+    report is made from the records there, and says so.
+    """
+    if args.from_records:
+        lines = Path(args.from_records).read_text(encoding="utf-8").splitlines()
+        records, wall = [json.loads(x) for x in lines if x.strip()], None
+    else:
+        records, wall = _execute(args)
+    out = {"provenance": provenance(argv, wall, args.workers) | {
+               "partial": f"report from the {len(records)} records of {args.from_records} (run stopped early; "
+                          "replicates run in order 0, 1, ... over all cells)" if args.from_records else None},
            "settings": {k: v for k, v in vars(args).items() if k != "out"} | {
                "truth": rc.TRUTH, "baseline_fraction": rc.BASELINE,
                "mcmc_settings": MCMC_SETTINGS if args.method == "mcmc" else None},
@@ -179,6 +202,7 @@ def parse(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "recovery"),
                     help="output path without suffix")
     ap.add_argument("--no-plot", action="store_true")
+    ap.add_argument("--from-records", help="make the report from a .partial.jsonl of an interrupted run")
     args = ap.parse_args(argv)
     if args.workers < 1 or args.replicates < 0 or args.replicates_other < 0:
         ap.error("--workers must be >= 1 and replicate counts >= 0")

@@ -102,8 +102,9 @@ def write_markdown(out: dict, path: Path) -> None:
     p, st = out["provenance"], out["settings"]
     text = [f"# Parameter recovery ({st['method']})\n",
             f"Command: `{p['command']}`  \nadhfit commit {p['commit']} (trust branch at {p['trust_commit']}), "
-            f"{p['date_utc']} UTC, {len(out['replicates'])} fits in {p['wall_s']:.0f} s on {p['workers']} "
-            f"worker(s), Python {p['python']}, {p['nproc']} cores.\n",
+            f"{p['date_utc']} UTC, {len(out['replicates'])} fits in "
+            f"{'?' if p['wall_s'] is None else round(p['wall_s'])} s on {p['workers']} "
+            f"worker(s), Python {p['python']}, {p['nproc']} cores.\n" + (f"\n**{p['partial']}**\n" if p.get("partial") else ""),
             f"Truth: W_ad = {st['truth']['work_of_adhesion']} J/m², μh = {st['truth']['mu_h']} N/m; "
             "every curve is written to CSV and fitted with default options (`fit_curve(path, scene)`, "
             "both slip conditions compared). Variants: clean; baseline (+"
