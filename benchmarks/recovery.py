@@ -69,9 +69,12 @@ def plan(args) -> list[dict]:
                     head = variant == "clean" and any(abs(noise - h) < 1e-12 for h in args.headline_noise)
                     n = args.replicates if head else args.replicates_other
                     jobs += [{"case": case, "slip": slip, "variant": variant, "noise": noise, "rep": k,
-                              "seed": args.seed, "method": args.method} for k in range(n)]
-    # replicate 0 of every cell first, then replicate 1, ...: any prefix of the run is balanced
-    return sorted(jobs, key=lambda j: j["rep"])
+                              "seed": args.seed, "method": args.method, "_order": k / n} for k in range(n)]
+    # every cell advances in proportion to its replicate count: any prefix of the run is balanced
+    jobs.sort(key=lambda j: j["_order"])
+    for j in jobs:
+        del j["_order"]
+    return jobs
 
 
 def _fit(path: Path, scene, method: str, seed: int) -> dict:
@@ -167,7 +170,7 @@ def run(args, argv: list[str]) -> dict:
         records, wall = _execute(args)
     out = {"provenance": provenance(argv, wall, args.workers) | {
                "partial": f"report from the {len(records)} records of {args.from_records} (run stopped early; "
-                          "replicates run in order 0, 1, ... over all cells)" if args.from_records else None},
+                          "every cell advances in proportion to its replicate count)" if args.from_records else None},
            "settings": {k: v for k, v in vars(args).items() if k != "out"} | {
                "truth": rc.TRUTH, "baseline_fraction": rc.BASELINE,
                "mcmc_settings": MCMC_SETTINGS if args.method == "mcmc" else None},
