@@ -85,17 +85,17 @@ def test_untared_load_cell_is_fitted_by_default():
 
 def test_force_offset_can_be_fixed():
     scene, curve, truth = _curve(noise=0.005, seed=12)
-    result = fit_curve(curve, scene, slip="no-slip", fit_force_offset=False, profile=False)
+    result = fit_curve(curve, scene, slip="no-slip", fit_force_offset=False, profile=False, points=60)
     zero = result.as_dict()["offsets"]["force"]
     assert zero["value"] == 0.0 and not zero["fitted"] and zero["note"]
     assert "force_offset" not in result.parameters
 
 
-def _coverage(combos) -> int:
+def _coverage(combos, compare_slips: bool) -> int:
     misses = 0
     for k, (case, slip) in enumerate(combos):
         scene, curve, truth = _curve(case, slip, noise=0.04, seed=900 + k)
-        result = fit_curve(curve, scene, slip="auto")
+        result = fit_curve(curve, scene, slip="auto" if compare_slips else slip)
         assert result.slip["selected"] in (slip, None), result.slip      # never the wrong condition
         misses += sum(not _inside(result.parameters[n], TRUE[n]) for n in TRUE)
     return misses
@@ -105,16 +105,18 @@ def test_coverage_at_four_percent_noise():
     """Reduced coverage check at 4 % force noise: 2 curves (a sphere under displacement control, a flat
     under pressure control), 4 intervals.  With a true coverage of 95 % the misses X ~ Binomial(4, 0.05),
     P(X >= 2) = 1.4 %: the test allows 1.  (Before issue 9 the pull-off jump was missed at this noise and
-    W_ad's interval held the truth in 0-7 % of curves: 2 misses or more were the rule.)"""
-    assert _coverage([(SPHERE, "no-slip"), (FLAT_P, "frictionless")]) <= 1
+    W_ad's interval held the truth in 0-7 % of curves: 2 misses or more were the rule.)  The slip is
+    imposed here to keep CI short; the slow variant compares both."""
+    assert _coverage([(SPHERE, "no-slip"), (FLAT_P, "frictionless")], compare_slips=False) <= 1
     assert stats.binom.sf(1, 4, 0.05) < 0.02
 
 
 @pytest.mark.slow
 def test_coverage_at_four_percent_noise_full():
-    """4 curves (both controls, both slips), 8 intervals: X ~ Binomial(8, 0.05), P(X >= 3) = 0.6 %."""
+    """4 curves (both controls, both slips), 8 intervals: X ~ Binomial(8, 0.05), P(X >= 3) = 0.6 %;
+    the slip compared (never the wrong one selected)."""
     assert _coverage([(SPHERE, "no-slip"), (SPHERE, "frictionless"), (FLAT_P, "no-slip"),
-                      (FLAT_P, "frictionless")]) <= 2
+                      (FLAT_P, "frictionless")], compare_slips=True) <= 2
     assert stats.binom.sf(2, 8, 0.05) < 0.01
 
 
@@ -133,7 +135,7 @@ def test_correlated_noise_is_detected_and_widens_the_intervals():
     for label, noise in (("white", e), ("ar", ar)):
         curve = Curve(path="<syn>", control=clean.control, x=clean.x, force=clean.force + noise,
                       line=clean.line, i_turn=clean.i_turn)
-        result = fit_curve(curve, scene, slip="no-slip", profile=False)
+        result = fit_curve(curve, scene, slip="no-slip", profile=False, points=60)
         mu = result.parameters["mu_h"]
         widths[label] = np.log(mu.ci95[1] / mu.ci95[0])
         correlated = any("correlated from row to row" in w for w in result.warnings)
@@ -150,5 +152,5 @@ def test_zero_drift_is_warned_about():
     drift = 0.03 * float(np.max(curve.force)) * np.linspace(0.0, 1.0, curve.force.size)
     drifted = Curve(path="<syn>", control=curve.control, x=curve.x, force=curve.force + drift,
                     line=curve.line, i_turn=curve.i_turn)
-    result = fit_curve(drifted, scene, slip="no-slip", profile=False)
+    result = fit_curve(drifted, scene, slip="no-slip", profile=False, points=60)
     assert any("drifted" in w for w in result.warnings), result.warnings
