@@ -1,0 +1,119 @@
+"""Markdown tables of the recovery study (``recovery.py``); also read by notebook 04."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import recovery_stats as rs
+
+ABBREV = {"determined": "det", "lower_bound": "lb", "upper_bound": "ub", "undetermined": "und", "error": "err"}
+_HEAD = ("n | W bias % | W sd % | W coverage | W status | μh bias % | μh sd % | μh coverage | μh status "
+         "| slip right/wrong/undecided | errors")
+
+LEGEND = """\
+Columns: **bias** = mean of (estimate/truth − 1) over the fits that gave a value, **sd** its scatter;
+**coverage** = fraction of the claims that hold the truth, with covered/claims (a two-sided interval
+covers when it holds the truth, a `lower_bound` when the truth is at or above it; `undetermined`
+makes no claim); `!` marks coverage below the 1 % lower binomial quantile of Bin(claims, 0.95), i.e.
+too low to be chance at that replicate count; **status** counts det(ermined), lb (lower_bound),
+ub (upper_bound), und(etermined), err (the fit raised); **slip** = selected condition right / wrong /
+undecided (null). Noise is σ as % of the peak force.
+"""
+
+
+def _pct(x) -> str:
+    return "–" if x is None else f"{100 * x:+.1f}"
+
+
+def _sd(x) -> str:
+    return "–" if x is None else f"{100 * x:.1f}"
+
+
+def _cov(p: dict) -> str:
+    if not p["claims"]:
+        return "–"
+    flag = " !" if p["below_binomial"] else ""
+    return f"{p['coverage']:.2f} ({p['covered']}/{p['claims']}){flag}"
+
+
+def _status(p: dict) -> str:
+    return " ".join(f"{ABBREV[s]}{c}" for s, c in p["status"].items() if c) or "–"
+
+
+def row(cell: dict) -> str:
+    """The table columns of one cell (after its key columns)."""
+    w, m, s = cell["work_of_adhesion"], cell["mu_h"], cell["slip_outcomes"]
+    return (f"{cell['n']} | {_pct(w['bias'])} | {_sd(w['scatter'])} | {_cov(w)} | {_status(w)} | "
+            f"{_pct(m['bias'])} | {_sd(m['scatter'])} | {_cov(m)} | {_status(m)} | "
+            f"{s['right']}/{s['wrong']}/{s['undecided']} | {cell['errors']}")
+
+
+def table(cells: list[dict], keys: tuple[str, ...]) -> str:
+    """A markdown table: key columns, then :func:`row`."""
+    head = " | ".join(k if k != "noise" else "noise %" for k in keys)
+    lines = [f"| {head} | {_HEAD} |", "|" + "---|" * (len(keys) + _HEAD.count("|") + 1)]
+    for c in sorted(cells, key=lambda c: tuple(_order(k, c[k]) for k in keys)):
+        vals = " | ".join(f"{100 * c[k]:g}" if k == "noise" else str(c[k]) for k in keys)
+        lines.append(f"| {vals} | {row(c)} |")
+    return "\n".join(lines)
+
+
+def _order(key: str, value):
+    from recovery_cases import CASES, SLIPS, VARIANTS  # noqa: PLC0415
+    order = {"case": list(CASES), "slip": list(SLIPS), "variant": list(VARIANTS)}.get(key)
+    return order.index(value) if order and value in order else value
+
+
+def _errors(out: dict) -> str:
+    errs = [r for r in out["replicates"] if r.get("error")]
+    if not errs:
+        return "No fit raised.\n"
+    seen: dict[str, int] = {}
+    for r in errs:
+        seen[r["error"][:160]] = seen.get(r["error"][:160], 0) + 1
+    return "Fits that raised (message: count):\n\n" + "\n".join(f"- `{m}`: {n}" for m, n in seen.items()) + "\n"
+
+
+def _bounds(out: dict) -> str:
+    """Per variant: how tight the one-sided W_ad bounds are, against the largest G the test reached."""
+    lines = []
+    for variant in dict.fromkeys(r["variant"] for r in out["replicates"]):
+        rr = [r for r in out["replicates"] if r["variant"] == variant
+              and r["work_of_adhesion"]["status"] == "lower_bound"]
+        if rr:
+            t = rr[0]["truth"]["work_of_adhesion"]
+            ratio = sorted(r["work_of_adhesion"]["lo"] / t for r in rr)
+            g = sorted(r["truth"]["G_max_reached"] / t for r in rr)
+            lines.append(f"- {variant}: {len(rr)} lower bounds, bound/truth median {ratio[len(ratio) // 2]:.3f} "
+                         f"(range {ratio[0]:.3f}–{ratio[-1]:.3f}); largest G reached/truth median "
+                         f"{g[len(g) // 2]:.3f}")
+    return ("W_ad reported as a lower bound:\n\n" + "\n".join(lines) + "\n") if lines else "No lower bounds.\n"
+
+
+def _duplicates(out: dict) -> str:
+    dup = [c for c in out["cells"] if c["variant"] == "duplicated"]
+    if not dup:
+        return "Not run.\n"
+    warned, n = sum(c["warned_duplicates"] for c in dup), sum(c["n"] for c in dup)
+    return f"A warning names the duplicated rows in {warned} of {n} fits of the duplicated variant.\n"
+
+
+def write_markdown(out: dict, path: Path) -> None:
+    """OUT.md: provenance, the pooled table (variant x noise), the per-cell table, failures."""
+    p, st = out["provenance"], out["settings"]
+    text = [f"# Parameter recovery ({st['method']})\n",
+            f"Command: `{p['command']}`  \nadhfit commit {p['commit']} (trust branch at {p['trust_commit']}), "
+            f"{p['date_utc']} UTC, {len(out['replicates'])} fits in "
+            f"{'?' if p['wall_s'] is None else round(p['wall_s'])} s on {p['workers']} "
+            f"worker(s), Python {p['python']}, {p['nproc']} cores.\n" + (f"\n**{p['partial']}**\n" if p.get("partial") else ""),
+            f"Truth: W_ad = {st['truth']['work_of_adhesion']} J/m², μh = {st['truth']['mu_h']} N/m; "
+            "every curve is written to CSV and fitted with default options (`fit_curve(path, scene)`, "
+            "both slip conditions compared). Variants: clean; baseline (+"
+            f"{100 * st['baseline_fraction']:g} % of the peak force on every row); trunc-turn (stopped 5–15 "
+            "rows after the end of loading); trunc-pinning (stopped inside pinning); trunc-delamination "
+            "(stopped inside delamination before pull-off; not for pressure control on a flat substrate, "
+            "where pull-off ends pinning); duplicated (every row twice).\n", LEGEND,
+            "## Pooled over cases and slip conditions\n", table(out["pooled"], ("variant", "noise")), "",
+            "## Per case\n", table(out["cells"], ("case", "slip", "variant", "noise")), "",
+            "## Failures\n", _errors(out), "## Duplicated rows\n", _duplicates(out),
+            "## One-sided bounds\n", _bounds(out)]
+    path.write_text("\n".join(text), encoding="utf-8")
