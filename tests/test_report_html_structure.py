@@ -6,6 +6,7 @@ import html as _html
 import json
 import re
 from html.parser import HTMLParser
+from pathlib import Path
 
 import pytest
 
@@ -186,3 +187,13 @@ def test_summary_page_escapes_errors(tmp_path, bad):
     rows = [{"file": "x.csv", "status": "failed", "error": bad, "report_dir": ""}]
     page = render_summary_html(rows, tmp_path)
     assert _html.escape(bad) in page and "<script>" not in page.replace("<script>" if bad != "<script>" else "", "")
+
+
+def test_fit_result_renders_itself_in_a_notebook():
+    """``FitResult._repr_html_`` is the report's own results table (units, status), not raw reprs."""
+    from adhfit.fitting import fit_curve
+    sample = Path(__file__).resolve().parents[1] / "sample_data" / "fea_displacement_no-slip"
+    result = fit_curve(sample / "curve.csv", sample / "scene.toml", slip="no-slip", profile=False)
+    html = result._repr_html_()
+    assert "<table" in html and "J/m²" in html and "N/m" in html and "determined" in html
+    assert "Estimate(" not in html and "None" not in html

@@ -1,7 +1,8 @@
 """``adhfit fit`` over several curves: one summary table, and a bad file never stops the run.
 
 Which files
-    Every argument is a CSV file or a folder.  A folder stands for every ``*.csv`` file below it
+    Every argument is a curve file or a folder.  A folder stands for every ``*.csv``, ``*.tsv`` and
+    LabVIEW ``*.lvm`` file below it
     (recursively, sorted; hidden files and folders and the output directory are skipped).  The run is a
     *batch* when there are several files or any folder; a single file is an ordinary fit.
 
@@ -54,6 +55,9 @@ __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row"
 SCENE_NAME = "scene.toml"
 EXIT_SOME_FAILED = 1
 _PARAMS = ("work_of_adhesion", "mu_h")
+#: the files a folder stands for: text exports (LabVIEW included); a folder of other .txt files is common
+CURVE_PATTERNS = ("*.csv", "*.tsv", "*.lvm")
+
 #: summary.csv columns, in order
 COLUMNS = (["file", "status", "error"]
            + [f"{p}{s}" for p in _PARAMS for s in ("", "_stderr", "_ci95_low", "_ci95_high")]
@@ -116,14 +120,15 @@ def discover(paths: Iterable[str | Path], *, scene: str | Path | None = None,
     for raw in paths:
         p = Path(raw)
         if p.is_dir():
-            files = sorted(f for f in p.rglob("*.csv") if f.is_file() and not _skip(f, p, outdir))
+            files = sorted(f for pattern in CURVE_PATTERNS for f in p.rglob(pattern)
+                           if f.is_file() and not _skip(f, p, outdir))
             found += [(f, p) for f in files]
         elif p.is_file():
             found.append((p, p.parent))
         else:
             raise InputError("DATA", str(p), "an existing CSV file or folder")
     if not found:
-        raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one *.csv file")
+        raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one *.csv, *.tsv or *.lvm file")
     seen, unique = set(), []
     for f, root in found:
         key = f.resolve()

@@ -328,9 +328,8 @@ class FitResult:
         return plot_fit(self, ax=ax, **kwargs)
 
     def _repr_html_(self) -> str:  # notebooks
-        rows = "".join(f"<tr><td>{e.symbol}</td><td>{e.value if e.value is not None else float('nan'):.5g}"
-                       f"</td><td>{e.stderr or float('nan'):.2g}</td><td>{e.ci95} ({e.status})</td>"
-                       f"<td>{e.unit}</td></tr>" for e in self.parameters.values())
-        return (f"<b>adhfit fit</b> ({self.method}); slip: {self.slip.get('verdict')}<table>"
-                f"<tr><th></th><th>value</th><th>stderr</th><th>95 %</th><th>unit</th></tr>{rows}</table>"
-                + "".join(f"<p>⚠ {w}</p>" for w in self.warnings))
+        from ..report.html import fit_summary_html  # noqa: PLC0415 - reports import matplotlib lazily
+        d = self.as_dict()
+        if d.get("curves"):  # a series: per-curve offsets are in the curves table, not here
+            d = {**d, "offsets": {}}
+        return fit_summary_html(d)
