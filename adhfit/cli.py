@@ -78,6 +78,9 @@ def _simulate_parser(sub) -> None:
     end.add_argument("--p-max", type=_number("p-max"), help=T["p_max"].description)
     p.add_argument("--lambda0", type=_number("lambda0"), default=None, help="pre-stretch (default 2)")
     p.add_argument("--points", type=_integer("points"), default=200, help="approximate number of rows")
+    p.add_argument("--membrane", choices=("large-stretch", "exact"), default="large-stretch",
+                   help="membrane model: the paper's large-stretch closed forms (default) or the exact "
+                        "neo-Hookean membrane (lambda0 then matters)")
     p.add_argument("-o", "--output", type=Path, help="write the history as CSV")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     p.add_argument("--plot", type=Path, help="write a plot of the history (PNG, PDF, SVG)")
@@ -101,7 +104,7 @@ def _run_simulate(args) -> int:
         kwargs = {"control": args.control, "slip": args.slip, "p": args.p, "d": args.d, "w": args.w,
                   "rs": args.rs, "a_max": args.a_max, "delta_max": args.delta_max,
                   "p_max": args.p_max, "lambda0": 2.0 if args.lambda0 is None else args.lambda0}
-    result = simulate(**kwargs, points=args.points)
+    result = simulate(**kwargs, points=args.points, membrane=args.membrane)
     if args.output is not None:
         _write_csv(result.frame, args.output)
     if args.plot is not None:

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
+from .errors import InputError
 from .loading import COLUMNS, History, history
 
 __all__ = ["SimulationResult", "simulate"]
@@ -39,7 +40,8 @@ class SimulationResult:
 
 def simulate(control: str, slip: str, *, p: float | None = None, d: float | None = None,
              w: float, rs: float, a_max: float | None = None, delta_max: float | None = None,
-             p_max: float | None = None, lambda0: float = 2.0, points: int = 200) -> SimulationResult:
+             p_max: float | None = None, lambda0: float = 2.0, points: int = 200,
+             membrane: str = "large-stretch") -> SimulationResult:
     """Simulate a loading history in dimensionless groups (DESIGN.md A1, A2b).
 
     Parameters
@@ -63,6 +65,8 @@ def simulate(control: str, slip: str, *, p: float | None = None, d: float | None
         Pre-stretch; cancels from every observable under the large-stretch approximation.
     points : int, default 200
         Approximate number of rows, spread over the three stages.
+    membrane : {"large-stretch", "exact"}, default "large-stretch"
+        The paper's closed forms, or the exact neo-Hookean membrane (DESIGN.md A6; lambda0 matters).
 
     Returns
     -------
@@ -74,6 +78,14 @@ def simulate(control: str, slip: str, *, p: float | None = None, d: float | None
     >>> round(r.summary["f_max"], 4)
     0.5105
     """
+    if membrane == "exact":
+        from .exact.history import exact_history  # noqa: PLC0415 - the exact model loads on demand
+        h = exact_history(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max,
+                          p_max=p_max, lambda0=lambda0, points=points)
+        frame = pd.DataFrame({k: h.columns[k] for k in COLUMNS})
+        return SimulationResult(frame=frame, summary=h.summary, inputs=h.inputs)
+    if membrane != "large-stretch":
+        raise InputError("membrane", membrane, "'large-stretch' or 'exact'")
     h: History = history(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max,
                          p_max=p_max, lambda0=lambda0, points=points)
     frame = pd.DataFrame({k: h.columns[k] for k in COLUMNS})

@@ -1,0 +1,11 @@
+"""The exact incompressible neo-Hookean membrane (no large-stretch approximation).
+
+``exact_history`` computes a full history with the DESIGN.md A2 columns (what
+``adhfit.simulate(..., membrane="exact")`` returns as a frame); ``free_inflation`` the free state.
+Modules: ``kernels`` (compiled ODEs and integrator), ``state`` (one shot), ``solve`` (Newton on the
+shooting unknowns), ``stages`` (the stage problems), ``control`` (inputs), ``history``.
+"""
+from .history import ExactHistory, exact_history
+from .inflation import apex_deflection, free_inflation
+
+__all__ = ["ExactHistory", "exact_history", "apex_deflection", "free_inflation"]

@@ -1,0 +1,136 @@
+"""Input checks and the control setting (fixed p or fixed d) of an exact-membrane history."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from scipy.optimize import brentq
+
+from ..errors import ConvergenceError, InputError
+from .inflation import free_inflation
+from .state import State
+
+__all__ = ["Control", "prepare"]
+
+
+@dataclass
+class Control:
+    """Validated inputs plus the free-inflation state the history starts from."""
+
+    control: str
+    slip: str
+    p: float | None
+    d: float | None
+    w: float
+    rs: float
+    lambda0: float
+    a_max: float
+    points: int
+    n: int
+    free: State
+    n_mc: int = 0
+    n_pin: int = 0
+    n_del: int = 0
+    _lc: float | None = None  # apex stretch of the last d0(p), for continuation
+    end: tuple = ("a_max", None)  # the loading end as given
+
+    @property
+    def crv(self) -> float:
+        return 0.0 if math.isinf(self.rs) else 1.0 / self.rs
+
+    def delta(self, st: State) -> float:
+        """delta = d0(p) - d with the exact free-inflation deflection (NaN without a Case I d0)."""
+        if self.control == "displacement":
+            return self.free.d - st.d
+        try:
+            fi = free_inflation(st.p, self.lambda0, self.n, self._lc)
+            self._lc = fi.lc
+            return fi.d - st.d
+        except ConvergenceError:
+            return math.nan
+
+    def inputs(self) -> dict:
+        return {"control": self.control, "slip": self.slip, "p": self.p, "d": self.d, "w": self.w,
+                "rs": self.rs, "lambda0": self.lambda0, "a_max": self.a_max, "points": self.points,
+                "membrane": "exact"}
+
+
+def _check(name, value, lo, hi, valid, *, lo_open=True, hi_open=True):
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isnan(value)
+    if ok:
+        ok = (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi)
+    if not ok:
+        raise InputError(name, value, valid)
+
+
+def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points, n) -> Control:
+    """Validate the inputs (InputError naming parameter, value and range) and inflate freely."""
+    if control not in ("displacement", "pressure"):
+        raise InputError("control", control, "'displacement' or 'pressure'")
+    if slip not in ("no-slip", "frictionless"):
+        raise InputError("slip", slip, "'no-slip' or 'frictionless'")
+    _check("lambda0", lambda0, 1.0, 100.0, "a float in (1, 100]", hi_open=False)
+    _check("w", w, 1e-6, 10.0, "a float in [1e-6, 10]", lo_open=False, hi_open=False)
+    _check("rs", rs, 0.02, math.inf, "a float in [0.02, inf] (inf: flat substrate)", lo_open=False,
+           hi_open=False)
+    _check("points", points, 9, 100000, "an integer in [10, 100000]")
+    if control == "displacement":
+        _check("p", p, -1.0, 1.0, "a float in (-1, 1) under displacement control")
+        if p <= -(0.0 if math.isinf(rs) else 1.0 / rs):
+            raise InputError("p", p, "a float > -1/rs (the membrane must be pressed onto the substrate)")
+        try:
+            free = free_inflation(p, lambda0, n)
+        except ConvergenceError as exc:
+            raise InputError("p", p, f"a pressure with a Case I free inflation at lambda0 = {lambda0}",
+                             "The exact membrane would turn past vertical at the clamp (Case II is not "
+                             "modelled): lower |p| or raise lambda0.") from exc
+    else:
+        _check("d", d, -1.0, 1.0, "a float in (-1, 1) under pressure control")
+        free = _free_at_gap(d, lambda0, n)
+    given = (("a_max", a_max), ("delta_max", delta_max), ("p_max", p_max))
+    ends = [(k, v) for k, v in given if v is not None]
+    if len(ends) != 1:
+        raise InputError("a_max", a_max, "exactly one of a_max, delta_max, p_max")
+    if delta_max is not None and control != "displacement":
+        raise InputError("delta_max", delta_max, "given under displacement control only (use p_max)")
+    if p_max is not None and control != "pressure":
+        raise InputError("p_max", p_max, "given under pressure control only (use delta_max)")
+    if a_max is not None:
+        _check("a_max", a_max, 1e-3, 0.95, "a float in [1e-3, 0.95] (contact radius over b)",
+               lo_open=False, hi_open=False)
+        if not math.isinf(rs) and a_max > 0.95 * rs:
+            raise InputError("a_max", a_max, f"a float <= 0.95 rs = {0.95 * rs:.6g} (contact on the upper "
+                             "hemisphere of the substrate)")
+    elif delta_max is not None:
+        _check("delta_max", delta_max, 0.0, 2.0, "a float in (0, 2) (displacement over b)")
+    else:
+        _check("p_max", p_max, free.p, 1e3, f"a float above the touching pressure {free.p:.6g}")
+    c = Control(control, slip, p, d, w, rs, lambda0, a_max, int(points), n, free)
+    c.end = ends[0]
+    c.n_mc = max(4, round(0.3 * points))
+    c.n_pin = max(4, round(0.2 * points))
+    c.n_del = max(5, points - c.n_mc - c.n_pin + 2)
+    return c
+
+
+def _free_at_gap(d, lambda0, n) -> State:
+    """Pressure control starts where the freely inflated apex touches the substrate: d0(p) = d."""
+    if d == 0.0:
+        return free_inflation(0.0, lambda0, n)
+    sgn = 1.0 if d > 0 else -1.0
+
+    def resid(q):
+        return sgn * free_inflation(sgn * q, lambda0, n).d - abs(d)
+
+    hi = 0.5
+    while True:
+        try:
+            if resid(hi) > 0.0:
+                break
+        except ConvergenceError as exc:
+            raise InputError("d", d, "a gap reachable by free inflation in Case I") from exc
+        hi = 0.5 * (hi + 1.0) if hi < 0.99 else hi * 1.5
+        if hi > 20:
+            raise InputError("d", d, "a gap reachable by free inflation in Case I")
+    q = brentq(resid, 0.0, hi, xtol=1e-15, rtol=1e-15)
+    return free_inflation(sgn * q, lambda0, n)

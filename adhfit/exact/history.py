@@ -1,0 +1,257 @@
+"""A full loading history of the exact membrane: making contact, pinning, delamination (DESIGN A2)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from ..errors import ConvergenceError, InputError
+from .control import Control, prepare
+from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
+from .state import DEFAULT_N, Config, State
+
+__all__ = ["ExactHistory", "exact_history", "COLUMNS"]
+
+COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
+
+
+@dataclass
+class ExactHistory:
+    """Same attributes as ``adhfit.loading.History``: ``columns``, ``summary``, ``inputs``."""
+
+    columns: dict
+    summary: dict
+    inputs: dict = field(default_factory=dict)
+    states: list = field(default_factory=list, repr=False)
+
+
+def _cluster(n):
+    return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
+
+
+def _split(points):
+    n_mc = max(4, round(0.3 * points))
+    n_pin = max(4, round(0.2 * points))
+    return n_mc, n_pin, max(5, points - n_mc - n_pin + 2)
+
+
+def _predict(v, vs, xs, x0):
+    """Lagrange extrapolation through the last (up to) three solved states."""
+    k = min(len(xs), 3)
+    if k == 0:
+        return list(x0)
+    if len(set(vs[-k:])) < k:
+        return list(xs[-1])
+    out = np.zeros(len(xs[-1]))
+    for i in range(1, k + 1):
+        li = 1.0
+        for j in range(1, k + 1):
+            if j != i:
+                li *= (v - vs[-j]) / (vs[-i] - vs[-j])
+        out += li * np.asarray(xs[-i])
+    return list(out)
+
+
+def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) -> list:
+    """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
+    predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
+    (a fold the parameter cannot pass) returns the states solved up to there instead of raising."""
+    out, xs, vs = [], [], []
+    for v in values:
+        guess = _predict(v, vs, xs, x0)
+        try:
+            st = stage.solve(v, guess)
+        except ConvergenceError:
+            if depth >= 12 or not vs:
+                if stop_ok:
+                    return out
+                raise
+            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok)
+            if len(mid) < 2:
+                out.extend(mid)
+                if stop_ok:
+                    return out
+                raise
+            st = mid[-1]
+        out.append(st)
+        xs.append(stage.x(st))
+        vs.append(v)
+    return out
+
+
+def _loading_end(stage: Stage, c: Control) -> float:
+    """a_max from delta_max or p_max: march the loading in a, then solve the end condition."""
+    name, target = c.end
+    value = (lambda s: c.free.d - s.d) if name == "delta_max" else (lambda s: s.p)
+    cap = 0.95 * min(1.0, c.rs)
+    a_prev, st_prev = 0.0, c.free
+    x = [c.free.lc, 1e-3 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
+    for a in np.geomspace(1e-3 * cap, cap, 60):
+        try:
+            st = march(stage, [a], x)[-1]
+        except ConvergenceError:
+            break
+        if value(st) >= target:
+            if a_prev == 0.0:
+                raise InputError(name, target, "a value reached by a contact radius above 1e-3 a_max")
+
+            def resid(aa):
+                return value(stage.solve(aa, stage.x(st))) - target
+            return brentq(resid, a_prev, a, xtol=1e-14, rtol=1e-14)
+        a_prev, st_prev, x = a, st, stage.x(st)
+    raise InputError(name, target, f"a value reached on loading (at most {value(st_prev):.6g} here, "
+                                   f"with contact radius {a_prev:.4g})")
+
+
+def _loading(cfg: Config, c: Control) -> tuple[list, State]:
+    stage = making_contact(cfg, c.control, c.p, c.d)
+    free = c.free
+    if c.a_max is None:
+        c.a_max = _loading_end(stage, c)
+    a_vals = _cluster(c.n_mc)[1:] * c.a_max
+    x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
+    states = march(stage, a_vals, x0)
+    return [free] + states, states[-1]
+
+
+def _onset(cfg, c, m):
+    """Bracket G = w along pinning (steps in alpha, halved where a step fails), then solve it."""
+    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
+    prev, prev_a, step = m, 0.0, 0.04
+    while True:
+        alpha = prev_a + step
+        if alpha >= top or step < 1e-9:
+            raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
+                                   "(the clamp turning past vertical, or the contact region going slack: "
+                                   "stretch -> 1, outside a membrane model)",
+                                   {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
+        try:
+            st = pin.solve(alpha, pin.x(prev))
+        except ConvergenceError:
+            step *= 0.5
+            continue
+        if st.G >= c.w:
+            break
+        prev, prev_a = st, alpha
+    on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    t = (c.w - prev.G) / (st.G - prev.G)
+    guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
+    guess = guess[:1] + [prev_a + t * (alpha - prev_a)] + guess[1:]
+    try:
+        return on_stage.solve(c.w, guess), pin
+    except ConvergenceError:
+        try:
+            a_on = brentq(lambda a: pin.solve(a, pin.x(prev)).G - c.w, prev_a, alpha, xtol=1e-14)
+        except ValueError as exc:
+            raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": alpha}) from exc
+        st = pin.solve(a_on, pin.x(prev))
+        return on_stage.solve(c.w, pin.x(st)[:1] + [a_on] + pin.x(st)[1:]), pin
+
+
+def _pinning(cfg, c, m):
+    on, pin = _onset(cfg, c, m)
+    u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))
+    states = march(pin, u[:-1] * on.alpha, pin.x(m)) if c.n_pin > 2 else []
+    return states + [on], on
+
+
+def _delamination(cfg, c, m, on):
+    stage = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    g = (1.0 - _cluster(c.n_del)[1:]) ** 1.5
+    g[-1] = min(g[-2] * 0.5, 1e-3)
+    rho = on.rho_a * g
+    states = march(stage, rho, stage.x(on), stop_ok=True)
+    if not states:
+        raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
+                               {"w": c.w, "lambda0": c.lambda0})
+    if len(states) < len(rho) and c.slip == "no-slip" and states[-1].alpha < 0.2:
+        end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
+        last = states[-1]
+        x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
+        states.append(end.solve(0.0, x))
+    return states, stage
+
+
+def _extremum(stage, states, key, sign):
+    """Refine the extremum of sign*key over the delamination path by a bounded Brent search."""
+    vals = [sign * key(s) for s in states]
+    i = int(np.argmin(vals))
+    if i == 0 or i == len(states) - 1:
+        return states[i]
+    lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
+    cache = {}
+
+    def fun(r):
+        st = stage.solve(r, stage.x(states[i]), tol=1e-14)  # a smooth objective: the extremum is flat
+        cache[r] = st
+        return sign * key(st)
+
+    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-11 * hi})
+    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i]), tol=1e-14)
+
+
+def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
+                  rs: float, lambda0: float, a_max: float | None = None, delta_max: float | None = None,
+                  p_max: float | None = None, points: int = 200, n: int = DEFAULT_N) -> ExactHistory:
+    """Compute a full history of the exact neo-Hookean membrane (DESIGN.md A2 columns).
+
+    Parameters
+    ----------
+    control, slip, p, d, w, rs, a_max, delta_max, p_max, points
+        As ``adhfit.simulate`` (dimensionless, DESIGN.md A1).
+    lambda0 : float
+        Pre-stretch, > 1; every observable depends on it.
+    n : int
+        Integration steps per membrane segment (the default 24 gives ~4e-9 on the observables).
+
+    Returns
+    -------
+    ExactHistory
+        ``columns`` (the A2 columns as arrays), ``summary`` (the A2 ``--json`` object), ``inputs``.
+
+    Raises
+    ------
+    InputError
+        A parameter out of range.
+    ConvergenceError
+        A state outside the model's domain (Case I only: the membrane must not turn past vertical at
+        the clamp) or a failed solve.
+    """
+    c = prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points, n)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    mc, m = _loading(cfg, c)
+    pin, on = _pinning(cfg, c, m)
+    dl, stage = _delamination(cfg, c, m, on)
+    key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
+    sign = -1.0 if control == "displacement" else 1.0
+    turn = _extremum(stage, [on] + dl, key, sign)
+    fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
+    extra = [s for s in (turn, fmin) if s is not on and all(s is not t for t in dl)]
+    dl = sorted(dl + extra, key=lambda s: -s.rho_a)
+    out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
+    if dl[-1].a > 2e-3 * c.a_max:
+        # the quasi-static branch ends at a finite contact radius (detachment from there is dynamic)
+        out.inputs["delamination_ends_at_a"] = dl[-1].a
+    return out
+
+
+def _row(st, c):
+    delta = c.delta(st)
+    return {"f": st.f, "delta": None if math.isnan(delta) else delta, "p": st.p, "a": st.a}
+
+
+def _assemble(c, mc, pin, dl, m, on, turn, fmin):
+    rows = [("making_contact", s) for s in mc] + [("pinning", s) for s in pin] + \
+           [("delamination", s) for s in dl]
+    turn_i = next(i for i, (_, s) in enumerate(rows) if s is turn)
+    cols = {"stage": np.array([r[0] for r in rows])}
+    for k in ("a", "alpha", "p", "d", "f", "G"):
+        cols[k] = np.array([getattr(s, k) for _, s in rows], dtype=float)
+    cols["G"][: len(mc)] = 0.0
+    cols["delta"] = np.array([c.delta(s) for _, s in rows], dtype=float)
+    cols["stable"] = np.arange(len(rows)) <= turn_i
+    summary = {"f_max": m.f, "onset": _row(on, c), "f_min": _row(fmin, c), "turning_point": _row(turn, c)}
+    return ExactHistory(cols, summary, c.inputs(), [s for _, s in rows])

@@ -1,0 +1,102 @@
+"""The contact stages of the exact membrane as shooting problems (one state each).
+
+Each ``Stage`` knows its unknowns, residuals and fixed values, so a history is a continuation over
+one parameter per stage: the contact radius ``a`` (making contact), the contact angle ``alpha``
+(pinning) or the material coordinate of the contact edge ``rho_a`` (delamination). Under pressure
+control ``p`` joins the unknowns and the gap ``d`` the residuals.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ..errors import ConvergenceError
+
+from .solve import solve_state
+from .state import Config, State
+
+__all__ = ["Stage", "making_contact", "pinning", "delamination", "onset", "branch_end"]
+
+
+@dataclass(frozen=True)
+class Stage:
+    """A one-parameter family of states."""
+
+    cfg: Config
+    edge: str
+    fixed: dict
+    unknowns: tuple
+    residuals: tuple
+    targets: dict
+    param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
+    memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
+
+    def solve(self, value: float, x0, tol: float = 1e-10) -> State:
+        """The state at parameter ``value``, Newton from the guess ``x0`` (ordered as unknowns) to
+        residuals below ``tol``."""
+        fixed, targets = dict(self.fixed), dict(self.targets)
+        value = float(value)
+        if self.param in targets:
+            targets[self.param] = value
+        else:
+            fixed[self.param] = value
+        st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets,
+                         memo=self.memo, tol=tol)
+        if not st.theta_end < 0.5 * math.pi:
+            raise ConvergenceError("exact membrane: the free membrane turns past vertical at the clamp "
+                                   "(Case II, outside the model: Case I only)",
+                                   {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
+        return st
+
+    def x(self, st: State) -> list:
+        """The unknowns of a solved state, as a start for the next one."""
+        return [getattr(st, k) for k in self.unknowns]
+
+
+def _control(control: str, p: float | None, d: float | None):
+    if control == "displacement":
+        return {"p": p}, (), (), {}
+    return {}, ("p",), ("d",), {"d": d}
+
+
+def making_contact(cfg: Config, control: str, p=None, d=None) -> Stage:
+    """Adhesionless, frictionless contact, parameter the contact radius ``a``."""
+    fx, u, r, t = _control(control, p, d)
+    return Stage(cfg, "continuous", fx, ("lc", "rho_a") + u, ("clamp", "a") + r, {**t, "a": 0.0}, "a")
+
+
+def pinning(cfg: Config, control: str, slip: str, m: State, p=None, d=None) -> Stage:
+    """Contact pinning after the loading end ``m``, parameter the contact angle ``alpha``."""
+    fx, u, r, t = _control(control, p, d)
+    fx = {**fx, "rho_a": m.rho_a, "alpha": 0.0}
+    if slip == "frictionless":
+        return Stage(cfg, "frictionless", fx, ("lc",) + u, ("clamp",) + r, t, "alpha")
+    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p",) + u, ("clamp",) + r, t, "alpha")
+
+
+def onset(cfg: Config, control: str, slip: str, m: State, w: float, p=None, d=None) -> Stage:
+    """The end of pinning (G = w at the pinned edge); its parameter is unused (``w``)."""
+    fx, u, r, t = _control(control, p, d)
+    fx = {**fx, "rho_a": m.rho_a}
+    t = {**t, "w": w}
+    if slip == "frictionless":
+        return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "w")
+    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "w")
+
+
+def delamination(cfg: Config, control: str, slip: str, m: State, w: float, p=None, d=None) -> Stage:
+    """Quasi-static delamination (G = w), parameter the material coordinate of the edge ``rho_a``."""
+    fx, u, r, t = _control(control, p, d)
+    t = {**t, "w": w}
+    fx = {**fx, "rho_a": m.rho_a}
+    if slip == "frictionless":
+        return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
+    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
+
+
+def branch_end(cfg: Config, control: str, m: State, w: float, p=None, d=None) -> Stage:
+    """No slip, weak adhesion: where the quasi-static delamination branch ends (alpha = 0, the
+    stretch mismatch alone releases w); unknowns lambda1+ and rho_a, parameter alpha (= 0)."""
+    fx, u, r, t = _control(control, p, d)
+    return Stage(cfg, "given", {**fx, "lc": m.lc, "alpha": 0.0}, ("l1p", "rho_a") + u,
+                 ("clamp", "G") + r, {**t, "w": w}, "alpha")

@@ -1,0 +1,92 @@
+"""Exact membrane: free inflation and adhesionless making contact.
+
+Checked against an independent high-precision solution (tests/exact_reference.py: a different
+formulation, adaptive DOP853 at rtol 1e-13), against the large-stretch closed forms as lambda0 grows,
+and by the energy balance d(U - PV) = -F dd.
+"""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from adhfit.exact.inflation import free_inflation
+from adhfit.exact.solve import solve_state
+from adhfit.exact.state import Config
+from tests import exact_reference as ref
+
+
+def _closed_d0(p):
+    return p / (1 + math.sqrt(1 - p * p))
+
+
+@pytest.mark.parametrize("p, lambda0", [(0.6, 1.1), (0.6, 1.5), (-0.4, 1.3)])
+def test_free_inflation_matches_reference(p, lambda0):
+    d0_ref, lc_ref = ref.free_inflation(abs(p), lambda0)
+    st = free_inflation(p, lambda0, n=64)
+    assert st.d == pytest.approx(math.copysign(d0_ref, p), abs=1e-9)
+    assert st.lc == pytest.approx(lc_ref, rel=1e-9)
+    assert free_inflation(p, lambda0).d == pytest.approx(math.copysign(d0_ref, p), abs=1e-7)  # default n
+
+
+def test_free_inflation_design_numbers():
+    # DESIGN.md B5: (approximation - exact)/exact of the apex deflection at p = 0.6
+    expected = {1.1: -0.33, 1.3: -0.15, 1.5: -0.067, 2.0: -0.012, 3.0: -0.001}
+    for lam0, err in expected.items():
+        exact = free_inflation(0.6, lam0).d
+        assert (_closed_d0(0.6) - exact) / exact == pytest.approx(err, abs=0.006 if lam0 < 1.4 else 0.0006)
+
+
+def test_free_inflation_converges_to_closed_form():
+    errs = [abs(free_inflation(0.6, lam0).d - _closed_d0(0.6)) for lam0 in (3.0, 6.0, 12.0)]
+    # the neglected terms are O(lambda^-6) relative to O(1): each doubling divides by >= 32
+    assert errs[1] < errs[0] / 32 and errs[2] < errs[1] / 32
+    assert errs[2] < 1e-7
+
+
+def test_step_halving():
+    vals = [free_inflation(0.6, 1.2, n=n).d for n in (16, 32, 64, 128)]
+    assert abs(vals[2] - vals[3]) < 1e-10
+    assert abs(vals[1] - vals[3]) > abs(vals[2] - vals[3])
+
+
+@pytest.mark.parametrize("rs", [0.5, math.inf])
+def test_making_contact_matches_reference(rs):
+    p, lam0, rho_a = 0.6, 1.2, 0.1
+    a, d, f = ref.making_contact(p, lam0, rs, rho_a)
+    cfg = Config(lam0, 0.0 if math.isinf(rs) else 1 / rs, 64)
+    fi = free_inflation(p, lam0)
+    st = solve_state(cfg, "continuous", {"p": p, "rho_a": rho_a}, ("lc",), (fi.lc,), ("clamp",), {})
+    assert st.a == pytest.approx(a, abs=1e-9)
+    assert st.d == pytest.approx(d, abs=1e-9)
+    assert st.f == pytest.approx(f, abs=1e-9)
+
+
+def test_making_contact_converges_to_large_stretch():
+    # large-stretch making contact at p = 0.6, rs = 0.5, a = 0.25 (paper eqs. 25-26; closed form
+    # values from the large-stretch engine of adhfit.core: f = 0.5105088062, d = -0.0081858...)
+    p, rs, a = 0.6, 0.5, 0.25
+    f_ls = math.pi * a * a * p * (1 + 1 / (p * rs))  # eq. (26)
+    errs = []
+    for lam0 in (5.0, 10.0):
+        fi = free_inflation(p, lam0)
+        st = solve_state(Config(lam0, 1 / rs), "continuous", {"p": p}, ("lc", "rho_a"), (fi.lc, a / fi.lc),
+                         ("clamp", "a"), {"a": a})
+        errs.append(abs(st.f - f_ls))
+    assert errs[0] < 1e-4 and errs[1] < errs[0] / 20
+
+
+@pytest.mark.parametrize("rs", [0.5, math.inf])
+def test_making_contact_energy_balance(rs):
+    p, lam0 = 0.6, 1.2
+    cfg = Config(lam0, 0.0 if math.isinf(rs) else 1 / rs)
+    fi = free_inflation(p, lam0)
+
+    def at(rho_a):
+        return solve_state(cfg, "continuous", {"p": p, "rho_a": rho_a}, ("lc",), (fi.lc,), ("clamp",), {})
+
+    h = 1e-4
+    sp, sm, s0 = at(0.12 + h), at(0.12 - h), at(0.12)
+    # U/(mu h b^2) - (P b/mu h) V/b^3 against F dd/(mu h b^2) = 2 f dd
+    dE = (sp.u - 2 * p * sp.v) - (sm.u - 2 * p * sm.v)
+    assert dE / (sp.d - sm.d) == pytest.approx(-2 * s0.f, rel=1e-6)
