@@ -39,7 +39,10 @@ def _inputs(data, scene):
     return curve, scene
 
 
-def _check_options(method, slip, sigma, points):
+def _check_options(method, slip, sigma, points, membrane="auto"):
+    from ..scene import MEMBRANE_MODELS  # noqa: PLC0415
+    if membrane not in MEMBRANE_MODELS:
+        raise InputError("membrane", membrane, "one of " + ", ".join(map(repr, MEMBRANE_MODELS)))
     if method == "mcmc":
         raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
     if method not in METHODS:
@@ -77,9 +80,11 @@ def _reported(fits: dict[str, SlipFit], verdict: dict) -> dict[str, Estimate]:
             for name, e in chosen.parameters.items()}
 
 
-def _warnings(scene, fits, verdict, curve, reported) -> tuple[list[str], list[str]]:
+def _warnings(scene, fits, verdict, curve, reported, model_info, effects) -> tuple[list[str], list[str]]:
     """(warnings, diagnostics): plain sentences for a lab user, and solver details."""
-    out = list(scene.warnings())
+    from .membrane_fit import effect_warning  # noqa: PLC0415
+    note = effect_warning(effects, verdict["parameters_from"], scene.prestretch)
+    out = [] if model_info["membrane"] == "exact" else [note] if note else list(scene.warnings())
     rep = fits[verdict["parameters_from"]]
     out += list(rep.warnings)
     diag = [f"[{s}] {d}" for s, f in fits.items() for d in f.diagnostics]
@@ -137,7 +142,7 @@ def _provenance(curve, scene, seed, method, options) -> dict:
 
 def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
               fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
-              points: int = DEFAULT_POINTS, profile: bool = True) -> FitResult:
+              points: int = DEFAULT_POINTS, profile: bool = True, membrane: str | None = None) -> FitResult:
     """Fit W_ad, μh and the slip condition to a measured curve.
 
     Parameters
@@ -163,7 +168,13 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         Rows per computed history.
     profile : bool
         Compute likelihood-profile intervals of W_ad and μh of the reported fit; the other fit's
-        intervals are from its covariance (an undecided verdict reports the hull of both).
+        intervals are from its covariance (an undecided verdict reports the hull of both).  An exact
+        fit profiles only when its optimum sits on the kink at the turning point (elsewhere its
+        covariance is trustworthy, and a profile costs ~30 exact histories).
+    membrane : {"auto", "large-stretch", "exact"}, optional
+        Default: the scene's ``[membrane] model``.  The large-stretch fit always runs first; ``exact``
+        refines it with the exact membrane, ``auto`` does so when the data resolve the approximation's
+        error (:mod:`.membrane_choice`).  ``report.json`` ``model`` says which ran and why.
 
     Returns
     -------
@@ -172,7 +183,8 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     t0 = time.perf_counter()
     curve, scene = _inputs(data, scene)
     slip = scene.slip if slip is None else slip
-    _check_options(method, slip, sigma, points)
+    membrane = scene.membrane_model if membrane is None else membrane
+    _check_options(method, slip, sigma, points, membrane)
     slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
     seg = segment(curve)
     raws = {}
@@ -181,10 +193,13 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         extra = [r.par.si(r.best.params) for r in raws.values()]
         raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
                            extra_starts=extra)
+    from .membrane_fit import choose_and_refit, wants_profile  # noqa: PLC0415
+    raws, model_info, effects = choose_and_refit(raws, scene, membrane)
     # profiles cost ~2/3 of a fit: compute them only for the fit whose estimates are reported
     fits = {s: summarize(r, profile=False) for s, r in raws.items()}
     verdict = _decide(fits)
-    if profile:  # the reported fit only; an undecided verdict hulls with the other's covariance interval
+    # the reported fit only; an undecided verdict hulls with the other's covariance interval
+    if profile and wants_profile(raws[verdict["parameters_from"]], model_info):
         wanted = verdict["parameters_from"]
         fits[wanted] = summarize(raws[wanted], profile=True)
         verdict = _decide(fits)
@@ -192,9 +207,9 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
             verdict = dict(verdict, parameters_from=wanted)
     rep = fits[verdict["parameters_from"]]
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
-               "fit_force_offset": fit_force_offset, "points": points, "profile": profile}
+               "fit_force_offset": fit_force_offset, "points": points, "profile": profile, "membrane": membrane}
     reported = _reported(fits, verdict)
-    warnings, diagnostics = _warnings(scene, fits, verdict, curve, reported)
+    warnings, diagnostics = _warnings(scene, fits, verdict, curve, reported, model_info, effects)
     return FitResult(
         method=method, slip=verdict, parameters=reported, fits=fits,
         n_points=len(curve.x), n_excluded=len(curve.excluded), sigma=rep.sigma,
@@ -203,4 +218,4 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         n_evaluations=sum(f.n_evaluations for f in fits.values()),
         n_histories=sum(f.n_histories for f in fits.values()), wall_time=time.perf_counter() - t0,
         provenance=_provenance(curve, scene, seed, method, options), segments=_segments(seg, rep),
-        excluded=tuple(curve.excluded), curve=curve, raw={s: f.raw for s, f in fits.items()})
+        excluded=tuple(curve.excluded), curve=curve, raw={s: f.raw for s, f in fits.items()}, model=model_info)

@@ -1,0 +1,110 @@
+"""Least-squares fits with the exact neo-Hookean membrane, refined from the large-stretch fits.
+
+An exact history costs ~10²–10³ times a large-stretch one, so the exact fit does not search: every
+slip condition is first fitted with the large-stretch membrane (starts, the free then fixed row
+split), then :func:`.membrane_choice.approximation_effect` computes the exact force at that optimum
+and the shift the approximation causes, and the exact fit starts from the large-stretch optimum
+corrected by that shift — usually within a fraction of a standard error of the exact optimum, so a
+few trust-region steps finish it.  It keeps the large-stretch fit's row split (the detachment row),
+and reuses the last histories (the force offset needs no new history).
+"""
+from __future__ import annotations
+
+from ..errors import AdhfitError
+from .lsq import FINE_TOL, RawFit, minimise, residual_function
+from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
+from .model import CurveModel, ModelDomainError
+from .starts import Start, noise_estimate
+
+__all__ = ["choose_and_refit", "exact_refit", "wants_profile", "effect_warning"]
+
+#: trust-region evaluations allowed to an exact refinement (each new parameter set is one history)
+MAX_NFEV = 60
+
+
+def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
+    """The exact-membrane least-squares fit of one slip condition, started from ``raw`` (large-stretch).
+
+    Parameters
+    ----------
+    raw : RawFit
+        The large-stretch fit of this slip condition.
+    effect : Effect, optional
+        Its approximation effect; its corrected start is used when given.
+    """
+    m, par = raw.model, raw.par
+    exact = CurveModel(m.curve, m.scene, m.slip, points=EXACT_POINTS, segments=m.segments,
+                       fixed_split=m.fixed_split, membrane="exact")
+    exact.n_histories, exact.n_evaluations = m.n_histories, m.n_evaluations
+    sigma_est = raw.scale if raw.sigma_given else (noise_estimate(m.force) or 1e-3 * par.f_scale)
+    residual = residual_function(exact, par, raw.scale, sigma_est)
+    si = par.si(raw.best.params)
+    starts = [Start(effect.start)] if effect is not None else []
+    starts.append(Start(si))
+    best, tried = None, []
+    for s in starts:
+        res = minimise(residual, par.params(s), scale_covar=not raw.sigma_given, max_nfev=MAX_NFEV, tol=FINE_TOL)
+        tried.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr), "membrane": "exact"})
+        if best is None or res.chisqr < best.chisqr:
+            best = res
+        if best.covar is not None and best.success:
+            break  # the corrected start converged: the plain one would cost as much again
+    return RawFit(slip=raw.slip, best=best, model=exact, par=par, scale=raw.scale, sigma_given=raw.sigma_given,
+                  starts=list(raw.starts) + tried)
+
+
+def _sigma(raw: RawFit) -> float:
+    return raw.scale if raw.sigma_given else raw.scale * float(raw.best.redchi) ** 0.5
+
+
+def choose_and_refit(raws: dict[str, RawFit], scene, membrane: str) -> tuple[dict[str, RawFit], dict, dict]:
+    """Decide the membrane model and, for the exact one, refit every slip condition with it.
+
+    Parameters
+    ----------
+    raws : dict slip -> RawFit
+        The large-stretch fits.
+    scene : adhfit.scene.Scene
+    membrane : {"auto", "large-stretch", "exact"}
+
+    Returns
+    -------
+    (raws, model, effects)
+        The fits to report (exact or the given ones), the report's ``model`` entry, and the
+        :class:`~.membrane_choice.Effect` per slip condition (empty when the exact membrane failed).
+    """
+    effects = {}
+    for s, raw in raws.items():
+        try:
+            effects[s] = approximation_effect(raw, _sigma(raw))
+        except (ModelDomainError, AdhfitError, ValueError):
+            continue
+    model = decide(effects, scene.prestretch, membrane)
+    if model["membrane"] != "exact":
+        return raws, model, effects
+    out = {s: exact_refit(raw, effects.get(s)) for s, raw in raws.items()}
+    return out, model, effects
+
+
+def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str | None:
+    """The sentence a large-stretch report adds: the approximation's estimated effect at the user's λ0."""
+    e = effects.get(slip)
+    if e is None:
+        return None
+    return (f"The large-stretch approximation (paper eq. 10) at λ0 = {lambda0:g}: fitting it to the exact "
+            f"membrane's curve at these values shifts W_ad by {100 * e.shift['work_of_adhesion']:+.2g} % and μh by "
+            f"{100 * e.shift['mu_h']:+.2g} % (largest force error {e.force_error / e.sigma:.2g} σ); "
+            f"use --membrane exact to remove it.")
+
+
+def wants_profile(raw: RawFit, model: dict) -> bool:
+    """Whether the reported fit needs likelihood profiles: always with the large-stretch membrane
+    (cheap); with the exact one only without a covariance or when the optimum sits on the kink at the
+    turning point, where the covariance is fragile (DESIGN.md B4)."""
+    if model["membrane"] != "exact" or raw.best.covar is None:
+        return True
+    si = raw.par.si(raw.best.params)
+    try:
+        return raw.model.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+    except ModelDomainError:
+        return True
