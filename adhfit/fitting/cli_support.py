@@ -13,6 +13,9 @@ from pathlib import Path
 from ..errors import InputError
 from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
 
+#: ``--membrane`` choices (adhfit.scene.MEMBRANE_MODELS; repeated here to keep the parser's imports light)
+MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
+
 __all__ = ["add_fit_arguments", "run_fit"]
 
 
@@ -62,6 +65,9 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit the displacement offset (displacement control)")
     p.add_argument("--pressure-offset", action="store_true", help="fit a pressure offset (pressure control)")
+    p.add_argument("--membrane", choices=MEMBRANE_CHOICES, default=None,
+                   help="membrane model: large-stretch (the paper's), exact (neo-Hookean, slower), auto (exact "
+                        "where the data resolve the difference); default: the scene's [membrane] model (auto)")
     p.add_argument("--points", type=_points, default=DEFAULT_POINTS, help="rows per computed history")
     p.add_argument("--no-profile", action="store_true", help="covariance intervals only (faster)")
     p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
@@ -109,7 +115,8 @@ def run_fit(args) -> int:
     curve = read_curve(args.data, scene.control)
     result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
                        fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
-                       seed=args.seed, points=args.points, profile=not args.no_profile)
+                       seed=args.seed, points=args.points, profile=not args.no_profile,
+                       membrane=getattr(args, "membrane", None))
     out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")
     out.mkdir(parents=True, exist_ok=True)
     write_json(result, out / "report.json")

@@ -24,7 +24,8 @@ def run_fit_mcmc(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     result = fit_curve_mcmc(curve, scene, slip=args.slip, sigma=sigma,
                             fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
-                            seed=args.seed, points=args.points, outdir=out)
+                            seed=args.seed, points=args.points, outdir=out,
+                            membrane=getattr(args, "membrane", None))
     write_json(result, out / "report.json")
     write_markdown(result, out / "report.md")
     images = {}
