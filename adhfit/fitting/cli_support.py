@@ -132,6 +132,16 @@ def run_fit(args) -> int:
 def _summary(result, out: Path) -> str:
     lines = [f"slip: {result.slip['verdict']}"]
     for e in result.parameters.values():
+        status = getattr(e, "status", "determined")
+        if status == "lower_bound":
+            lines.append(f"{e.name} >= {e.ci95[0]:.5g} {e.unit} (one-sided 95 %; the data bound it from below only)")
+            continue
+        if status == "upper_bound":
+            lines.append(f"{e.name} <= {e.ci95[1]:.5g} {e.unit} (one-sided 95 %; the data bound it from above only)")
+            continue
+        if status == "undetermined":
+            lines.append(f"{e.name}: not determined by these data")
+            continue
         ci = "" if e.ci95 is None else f"  95 % [{e.ci95[0]:.5g}, {e.ci95[1]:.5g}]"
         se = "" if e.stderr is None else f" ± {e.stderr:.2g}"
         lines.append(f"{e.name} = {e.value:.5g}{se} {e.unit}{ci}")

@@ -24,6 +24,7 @@ from .summary import summarize
 __all__ = ["fit_curve", "METHODS", "SIGMA_ESTIMATED"]
 
 SIGMA_ESTIMATED = "estimated from the residuals (lmfit scales the covariance by the reduced chi-square)"
+_MAIN = ("work_of_adhesion", "mu_h")
 #: w = W_ad/μh within this fraction of the table's upper bound earns a warning
 _W_EDGE = 0.98
 
@@ -202,6 +203,11 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     if profile and wants_profile(raws[verdict["parameters_from"]], model_info):
         wanted = verdict["parameters_from"]
         fits[wanted] = summarize(raws[wanted], profile=True)
+        if len(fits) > 1 and verdict["selected"] is None and \
+                any(not e.determined for k, e in fits[wanted].parameters.items() if k in _MAIN):
+            # an undecided slip hulls both fits: a one-sided result needs the other's profile too
+            for other in (s for s in fits if s != wanted):
+                fits[other] = summarize(raws[other], profile=True)
         verdict = _decide(fits)
         if verdict["parameters_from"] != wanted:
             verdict = dict(verdict, parameters_from=wanted)

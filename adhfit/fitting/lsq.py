@@ -149,8 +149,9 @@ def minimise(residual, params: lmfit.Parameters, *, scale_covar: bool, max_nfev:
     χ² to ~1e-4 relative (a few hundredths of σ² on ~10² rows).
     """
     mini = lmfit.Minimizer(residual, params, scale_covar=scale_covar)
-    return mini.minimize(method="least_squares", max_nfev=max_nfev, diff_step=DIFF_STEP,
-                         x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
+    with np.errstate(invalid="ignore"):  # a flat direction: lmfit's sqrt of a negative variance -> no stderr
+        return mini.minimize(method="least_squares", max_nfev=max_nfev, diff_step=DIFF_STEP,
+                             x_scale="jac", ftol=tol, xtol=tol, gtol=tol)
 
 
 @dataclass(frozen=True)
