@@ -7,6 +7,7 @@ are fixed, so a failure is reproducible, and the slow matrix shows whether misse
 """
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -115,11 +116,22 @@ def test_estimated_effect_matches_the_large_stretch_bias():
 # exact fits recover the truth (one reduced case in CI, the matrix with --runslow)
 
 
-def test_exact_fit_recovers_lambda0_1_2_frictionless():
+def test_exact_fit_recovers_lambda0_1_2_frictionless_cli(tmp_path, capsys):
+    """Through ``adhfit fit --membrane exact``: report.json says which model ran, and it recovers."""
+    from adhfit.cli import main
     curve, truth = exact_curve(1.2, "frictionless", noise=0.01, seed=11, rows=200)
-    res = fit_curve(curve, scene(1.2), slip="frictionless")
-    assert res.model["membrane"] == "exact" and "λ0 = 1.2" in res.model["why"]
-    _check_recovery(res, truth)
+    data = tmp_path / "curve.csv"
+    rows = "\n".join(f"{x:.9e},{f:.9e}" for x, f in zip(curve.x, curve.force))
+    data.write_text("displacement [m],force [N]\n" + rows + "\n")
+    (tmp_path / "scene.toml").write_text(SCENE_TEXT.format(model="").replace("1.3", "1.2"))
+    out = tmp_path / "out"
+    assert main(["fit", str(data), "--membrane", "exact", "--slip", "frictionless", "--no-plot", "-o", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["model"]["membrane"] == "exact" and "λ0 = 1.2" in report["model"]["why"]
+    assert "membrane: exact" in capsys.readouterr().out
+    for name in ("work_of_adhesion", "mu_h"):
+        p = report["parameters"][name]
+        assert abs(p["value"] / truth[name] - 1.0) < 0.02 and p["ci95"][0] <= truth[name] <= p["ci95"][1], p
 
 
 @pytest.mark.slow

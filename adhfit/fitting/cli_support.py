@@ -131,6 +131,7 @@ def run_fit(args) -> int:
 
 def _summary(result, out: Path) -> str:
     lines = [f"slip: {result.slip['verdict']}"]
+    lines.append(f"membrane: {result.model['membrane']} ({result.model['why']})")
     for e in result.parameters.values():
         status = getattr(e, "status", "determined")
         if status == "lower_bound":

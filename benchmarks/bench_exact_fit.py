@@ -1,0 +1,67 @@
+"""Exact-membrane least-squares fits: recovery and cost (issue 11 item 3).
+
+Curves from ``adhfit.exact.exact_history`` (tests/exact_curves.py: b = 2 mm, R_s = 1 mm, P = 600 Pa,
+μh = 2 N/m, W_ad = 0.4 J/m^2, 240 rows, displacement control), fitted with default settings
+(``membrane`` from the scene: auto; slip auto).  Reports per case: the membrane auto chose, the slip
+verdict, the errors of W_ad and μh, whether the 95 % intervals hold the truth, wall and CPU seconds
+and the number of histories.  CPU seconds are the figure to compare (the machine is shared).
+
+    PYTHONPATH=. python benchmarks/bench_exact_fit.py [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from adhfit.fitting.fit import fit_curve  # noqa: E402
+from tests.exact_curves import exact_curve, scene  # noqa: E402
+
+CASES = [(lam, slip, noise) for lam in (1.2, 1.5, 2.0, 3.0) for slip in ("frictionless", "no-slip")
+         for noise in (0.005, 0.01)]
+
+
+def run(lam: float, slip: str, noise: float, seed: int = 1) -> dict:
+    """One fit of one exact curve; the row of the results table."""
+    curve, truth = exact_curve(lam, slip, noise=noise, seed=seed)
+    t, c = time.perf_counter(), time.process_time()
+    res = fit_curve(curve, scene(lam))
+    row = {"lambda0": lam, "slip": slip, "noise": noise, "membrane": res.model["membrane"],
+           "verdict": res.slip["verdict"], "selected": res.slip["selected"],
+           "wall_s": time.perf_counter() - t, "cpu_s": time.process_time() - c, "histories": res.n_histories,
+           "why": res.model["why"]}
+    for k in ("work_of_adhesion", "mu_h"):
+        e = res.parameters[k]
+        row[f"{k}_error"] = e.value / truth[k] - 1.0
+        row[f"{k}_covered"] = bool(e.ci95 and e.ci95[0] is not None and e.ci95[1] is not None
+                                   and e.ci95[0] <= truth[k] <= e.ci95[1])
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="0.5 % noise only")
+    args = ap.parse_args()
+    rows = [run(*c) for c in CASES if not (args.quick and c[2] != 0.005)]
+    out = ROOT / "benchmarks" / "results"
+    (out / "exact_fit.json").write_text(json.dumps(rows, indent=1))
+    lines = ["# Exact-membrane fits (default settings)", "", f"`PYTHONPATH=. python benchmarks/bench_exact_fit.py"
+             f"{' --quick' if args.quick else ''}`", "",
+             "| λ0 | truth | noise | membrane | slip verdict | W_ad err | μh err | in 95 % (W/μh) | CPU s | wall s |"
+             " histories |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['lambda0']:g} | {r['slip']} | {100 * r['noise']:g} % | {r['membrane']} | {r['verdict']} | "
+                     f"{100 * r['work_of_adhesion_error']:+.2f} % | {100 * r['mu_h_error']:+.2f} % | "
+                     f"{'yes' if r['work_of_adhesion_covered'] else 'NO'}/{'yes' if r['mu_h_covered'] else 'NO'} | "
+                     f"{r['cpu_s']:.1f} | {r['wall_s']:.1f} | {r['histories']} |")
+    (out / "exact_fit.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
