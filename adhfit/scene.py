@@ -20,13 +20,11 @@ from .errors import DataError, InputError
 from .params import A_MAX_OVER_RS, DIMENSIONLESS, FITTED
 from .units import DIMENSIONS, GROUPS, Scales, parse_quantity
 
-__all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMBRANE_MODELS", "LAYOUT",
-           "PRIOR_DISTS"]
+__all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMBRANE_MODELS", "LAYOUT", "PRIOR_DISTS"]
 
 CONTROLS = ("displacement", "pressure")
 SLIPS = ("auto", "no-slip", "frictionless")
-#: membrane models a fit may use (DESIGN.md A6): ``auto`` picks one from the data's resolution
-MEMBRANE_MODELS = ("auto", "large-stretch", "exact")
+MEMBRANE_MODELS = ("auto", "large-stretch", "exact")  # of a fit (DESIGN.md A6)
 
 #: TOML layout (DESIGN.md A3): section -> key -> (Scene field, dimension or None for a word).
 LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {
@@ -67,7 +65,7 @@ class Scene:
     control : {"displacement", "pressure"}
         Which quantity the test drives.
     prestretch : float
-        Equibiaxial pre-stretch λ0 > 1.  Observables do not depend on it; see :meth:`warnings`.
+        Equibiaxial pre-stretch λ0 > 1: cancels under the large-stretch approximation, not for the exact membrane.
     mu_h : float or str, optional
         Membrane stiffness μh, N/m; ``None`` when it is to be fitted.
     pressure : float or str, optional
@@ -82,8 +80,7 @@ class Scene:
         At most one loading end for simulations: the largest contact radius (m), contact
         displacement δ (m, displacement control) or pressure (Pa, pressure control) on loading.
     membrane_model : {"auto", "large-stretch", "exact"}
-        Membrane model of a fit (``[membrane] model``): the paper's large-stretch approximation, the
-        exact neo-Hookean membrane, or ``"auto"`` (the exact one where the data resolve the difference).
+        ``[membrane] model`` of a fit; ``"auto"``: exact where the data resolve the approximation's error.
     priors : dict, optional
         ``{parameter: {"dist": ..., ...}}`` for fitted parameters, see :func:`normalize_priors`.
     source : str, optional
