@@ -17,16 +17,16 @@ from adhfit.scene import Scene
 B, RS, MU_H, W_AD, PRESSURE = 2e-3, 1e-3, 2.0, 0.4, 600.0  # p = P b / (2 μh) = 0.3; w = 0.2
 
 
-def scene(lambda0: float, membrane: str = "auto") -> Scene:
+def scene(lambda0: float, membrane: str = "auto", pressure: float = PRESSURE) -> Scene:
     """The test's scene (SI): b = 2 mm, R_s = 1 mm, P = 600 Pa under displacement control."""
-    return Scene(membrane_radius=B, substrate_radius=RS, control="displacement", pressure=PRESSURE,
+    return Scene(membrane_radius=B, substrate_radius=RS, control="displacement", pressure=pressure,
                  prestretch=lambda0, membrane_model=membrane)
 
 
 def exact_curve(lambda0: float, slip: str, *, noise: float, seed: int, rows: int = 240,
-                delta_max: float = 0.25) -> tuple[Curve, dict]:
+                delta_max: float = 0.25, pressure: float = PRESSURE) -> tuple[Curve, dict]:
     """(curve, truth): loading to δ = delta_max·b, unloading past pull-off, force noise ``noise``·F_max."""
-    h = exact_history("displacement", slip, p=PRESSURE * B / (2 * MU_H), w=W_AD / MU_H, rs=RS / B,
+    h = exact_history("displacement", slip, p=pressure * B / (2 * MU_H), w=W_AD / MU_H, rs=RS / B,
                       lambda0=lambda0, delta_max=delta_max, points=600)
     c = h.columns
     stage, stable = np.asarray(c["stage"]), np.asarray(c["stable"], bool)
