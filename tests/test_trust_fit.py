@@ -90,7 +90,7 @@ def test_untared_load_cell_is_fitted_by_default():
 
 def test_force_offset_can_be_fixed():
     scene, curve, truth = _curve(noise=0.005, seed=12)
-    result = fit_curve(curve, scene, slip="no-slip", fit_force_offset=False, profile=False)
+    result = fit_curve(curve, scene, slip="no-slip", fit_force_offset=False, profile=False, points=60)
     zero = result.as_dict()["offsets"]["force"]
     assert zero["value"] == 0.0 and not zero["fitted"] and zero["note"]
     assert "force_offset" not in result.parameters
@@ -138,7 +138,7 @@ def test_correlated_noise_is_detected_and_widens_the_intervals():
     for label, noise in (("white", e), ("ar", ar)):
         curve = Curve(path="<syn>", control=clean.control, x=clean.x, force=clean.force + noise,
                       line=clean.line, i_turn=clean.i_turn)
-        result = fit_curve(curve, scene, slip="no-slip", profile=False)
+        result = fit_curve(curve, scene, slip="no-slip", profile=False, points=60)
         mu = result.parameters["mu_h"]
         widths[label] = np.log(mu.ci95[1] / mu.ci95[0])
         correlated = any("correlated from row to row" in w for w in result.warnings)
@@ -155,5 +155,5 @@ def test_zero_drift_is_warned_about():
     drift = 0.03 * float(np.max(curve.force)) * np.linspace(0.0, 1.0, curve.force.size)
     drifted = Curve(path="<syn>", control=curve.control, x=curve.x, force=curve.force + drift,
                     line=curve.line, i_turn=curve.i_turn)
-    result = fit_curve(drifted, scene, slip="no-slip", profile=False)
+    result = fit_curve(drifted, scene, slip="no-slip", profile=False, points=60)
     assert any("drifted" in w for w in result.warnings), result.warnings

@@ -41,6 +41,8 @@ DIFF_STEP = 1e-6
 #: optimiser tolerances (scipy ftol = xtol = gtol) at an optimum, and for a start's first descent
 FINE_TOL = 1e-8
 COARSE_TOL = 1e-5
+#: W_ad/μh range of the model (adhfit.params.DIMENSIONLESS["w"])
+W_RANGE = (1e-6, 10.0)
 #: residual of a parameter set outside the model's domain, per row, in units of s
 PENALTY = 1e3
 
@@ -78,11 +80,17 @@ class Parametrisation:
     def params(self, start: Start) -> lmfit.Parameters:
         """lmfit Parameters at ``start`` with the bounds of the parameter table (SI -> internal)."""
         p = lmfit.Parameters()
+        # box bounds inside the model's domain (w = W_ad/μh in [1e-6, 10]) around the start's μh, with a
+        # margin: a flat W_ad (a test stopped before delamination) must not send the optimiser far away
+        mu0 = float(start["mu_h"])
+        box = {"work_of_adhesion": (math.log(W_RANGE[0] * mu0) - 1.5, math.log(W_RANGE[1] * mu0) + 1.5),
+               "mu_h": (math.log(mu0) - 7.0, math.log(mu0) + 7.0)}
         for name in ("work_of_adhesion", "mu_h"):
             row = FITTED[name]
-            lo = math.log(row.lower) if row.lower > 0 else -np.inf
-            hi = math.log(row.upper) if math.isfinite(row.upper) else np.inf
-            p.add(f"ln_{name}", value=math.log(start[name]), min=lo, max=hi)
+            lo = max(math.log(row.lower) if row.lower > 0 else -np.inf, box[name][0])
+            hi = min(math.log(row.upper) if math.isfinite(row.upper) else np.inf, box[name][1])
+            value = float(np.clip(math.log(start[name]), lo + 1e-9, hi - 1e-9))
+            p.add(f"ln_{name}", value=value, min=lo, max=hi)
         if self.fit_x_offset:
             row = FITTED[OFFSET_NAME[self.control]]
             p.add("x_offset", value=start["x_offset"] / self.x_scale, min=row.lower / self.x_scale,

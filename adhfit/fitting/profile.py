@@ -30,6 +30,10 @@ __all__ = ["ProfileLimit", "profile_interval", "one_side", "critical_value"]
 #: stop when sqrt(D/critical) is within this of 1
 TOL = 0.03
 MAX_SUBFITS = 8
+#: a side is open when two successive probes, the last beyond FLAT_STEPS first-step standard errors,
+#: both stay below this fraction of the critical sqrt(D)
+FLAT_Q = 0.1
+FLAT_STEPS = 5.0
 #: largest first step of a profile, internal units (a factor e in W_ad or μh)
 MAX_FIRST_STEP = 1.0
 #: tolerance of the sub-fits (see lsq.minimise)
@@ -128,6 +132,9 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
         if abs(q - 1.0) < TOL:
             return ProfileLimit(value, k + 1, True, better, nfev)
         if value in (lo, hi) and q < 1.0:
+            return ProfileLimit(value, k + 1, False, better, nfev, open=True)
+        if len(tried) >= 2 and all(p[1] < FLAT_Q for p in tried[-2:]) and abs(t) > FLAT_STEPS * se:
+            # χ² barely moves over many standard errors: the data do not bound this side
             return ProfileLimit(value, k + 1, False, better, nfev, open=True)
         t = _next_step(tried, direction, se)
     above = [t for t, q in tried if q >= 1.0]

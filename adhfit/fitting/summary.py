@@ -16,7 +16,7 @@ from scipy import stats
 
 from .lsq import RawFit, residual_function
 from .model import ModelDomainError
-from .profile import one_side, profile_interval
+from .profile import one_side
 from .residual_checks import correlation_factor, widen, zero_drift
 from .result import Estimate, SlipFit
 from .selection import information_criteria
@@ -156,6 +156,18 @@ def _warnings(raw: RawFit, est: dict, sigma: float, rho: float, factor: float, s
     return out
 
 
+def _profile(residual, best, name: str, sigma_given: bool):
+    """(lower, upper) profile limits; when one side is open, the other is the one-sided 95 % bound
+    (the two-sided 90 % limit).  The upper side goes first: it is the one a test stopped before
+    delamination leaves open for W_ad, so the lower side is then computed once, at the right level."""
+    hi = one_side(residual, best, name, +1.0, sigma_given=sigma_given, level=0.95)
+    lo = one_side(residual, best, name, -1.0, sigma_given=sigma_given, level=0.90 if hi.open else 0.95)
+    if lo.open and not hi.open:
+        side = one_side(residual, best, name, +1.0, sigma_given=sigma_given, level=0.90)
+        hi = side if side.bound is not None else hi
+    return lo, hi
+
+
 def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
     """The :class:`SlipFit` of one slip condition (estimates, criteria, curves, warnings)."""
     best, par, m = raw.best, raw.par, raw.model
@@ -164,13 +176,7 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
     profiles = {}
     if profile:  # without a covariance the profile still works, from a 10 % first step
         for name in ("work_of_adhesion", "mu_h"):
-            lo, hi = profile_interval(residual, best, INTERNAL[name], sigma_given=raw.sigma_given)
-            if hi.open != lo.open:  # one side only: its one-sided 95 % bound (the two-sided 90 % limit)
-                d = -1.0 if hi.open else 1.0
-                side = one_side(residual, best, INTERNAL[name], d, sigma_given=raw.sigma_given)
-                if side.bound is not None:
-                    lo, hi = (side, hi) if hi.open else (lo, side)
-            profiles[name] = (lo, hi)
+            profiles[name] = _profile(residual, best, INTERNAL[name], raw.sigma_given)
     est = _estimates(raw, profiles)
     si = par.si(best.params)
     try:
