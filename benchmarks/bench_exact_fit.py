@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import platform
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -48,10 +51,15 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="0.5 % noise only")
     args = ap.parse_args()
     rows = [run(*c) for c in CASES if not (args.quick and c[2] != 0.005)]
+    git = {"cwd": ROOT, "capture_output": True, "text": True}
+    rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], **git).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "adhfit"], **git).stdout
+    machine = (f"commit {rev}{'+dirty' if dirty.strip() else ''}; Python {platform.python_version()}, "
+               f"nproc {os.cpu_count()} (shared with other jobs: compare CPU seconds)")
     out = ROOT / "benchmarks" / "results"
     (out / "exact_fit.json").write_text(json.dumps(rows, indent=1))
     lines = ["# Exact-membrane fits (default settings)", "", f"`PYTHONPATH=. python benchmarks/bench_exact_fit.py"
-             f"{' --quick' if args.quick else ''}`", "",
+             f"{' --quick' if args.quick else ''}`", "", machine, "",
              "| λ0 | truth | noise | membrane | slip verdict | W_ad err | μh err | in 95 % (W/μh) | CPU s | wall s |"
              " histories |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
