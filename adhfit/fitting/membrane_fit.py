@@ -11,7 +11,7 @@ and reuses the last histories (the force offset needs no new history).
 from __future__ import annotations
 
 from ..errors import AdhfitError
-from .lsq import FINE_TOL, RawFit, minimise, residual_function
+from .lsq import RawFit, minimise, residual_function
 from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
 from .model import CurveModel, ModelDomainError
 from .starts import Start, noise_estimate
@@ -20,6 +20,10 @@ __all__ = ["choose_and_refit", "exact_refit", "wants_profile", "effect_warning"]
 
 #: trust-region evaluations allowed to an exact refinement (each new parameter set is one history)
 MAX_NFEV = 60
+#: optimiser tolerance (scipy ftol = xtol = gtol) of the exact refinement: 1e-5 of ln W_ad, ln μh is
+#: ~1e-2 of their standard errors at 0.5 % noise, and 1e-5 of χ² is ~1e-3 on a few hundred rows, far
+#: below what the slip comparison (ΔBIC of units) needs; FINE_TOL (1e-8) cost ~4x the histories
+EXACT_TOL = 1e-5
 
 
 def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
@@ -43,7 +47,7 @@ def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
     starts.append(Start(si))
     best, tried = None, []
     for s in starts:
-        res = minimise(residual, par.params(s), scale_covar=not raw.sigma_given, max_nfev=MAX_NFEV, tol=FINE_TOL)
+        res = minimise(residual, par.params(s), scale_covar=not raw.sigma_given, max_nfev=MAX_NFEV, tol=EXACT_TOL)
         tried.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr), "membrane": "exact"})
         if best is None or res.chisqr < best.chisqr:
             best = res
