@@ -96,11 +96,11 @@ def test_force_offset_can_be_fixed():
     assert "force_offset" not in result.parameters
 
 
-def _coverage(combos) -> int:
+def _coverage(combos, compare_slips: bool) -> int:
     misses = 0
     for k, (case, slip) in enumerate(combos):
         scene, curve, truth = _curve(case, slip, noise=0.04, seed=900 + k)
-        result = fit_curve(curve, scene, slip="auto")
+        result = fit_curve(curve, scene, slip="auto" if compare_slips else slip)
         assert result.slip["selected"] in (slip, None), result.slip      # never the wrong condition
         misses += sum(not _inside(result.parameters[n], TRUE[n]) for n in TRUE)
     return misses
@@ -110,16 +110,18 @@ def test_coverage_at_four_percent_noise():
     """Reduced coverage check at 4 % force noise: 2 curves (a sphere under displacement control, a flat
     under pressure control), 4 intervals.  With a true coverage of 95 % the misses X ~ Binomial(4, 0.05),
     P(X >= 2) = 1.4 %: the test allows 1.  (Before issue 9 the pull-off jump was missed at this noise and
-    W_ad's interval held the truth in 0-7 % of curves: 2 misses or more were the rule.)"""
-    assert _coverage([(SPHERE, "no-slip"), (FLAT_P, "frictionless")]) <= 1
+    W_ad's interval held the truth in 0-7 % of curves: 2 misses or more were the rule.)  The slip is
+    imposed here to keep CI short; the slow variant compares both."""
+    assert _coverage([(SPHERE, "no-slip"), (FLAT_P, "frictionless")], compare_slips=False) <= 1
     assert stats.binom.sf(1, 4, 0.05) < 0.02
 
 
 @pytest.mark.slow
 def test_coverage_at_four_percent_noise_full():
-    """4 curves (both controls, both slips), 8 intervals: X ~ Binomial(8, 0.05), P(X >= 3) = 0.6 %."""
+    """4 curves (both controls, both slips), 8 intervals: X ~ Binomial(8, 0.05), P(X >= 3) = 0.6 %;
+    the slip compared (never the wrong one selected)."""
     assert _coverage([(SPHERE, "no-slip"), (SPHERE, "frictionless"), (FLAT_P, "no-slip"),
-                      (FLAT_P, "frictionless")]) <= 2
+                      (FLAT_P, "frictionless")], compare_slips=True) <= 2
     assert stats.binom.sf(2, 8, 0.05) < 0.01
 
 
