@@ -3,7 +3,9 @@
 One call reads the data and the scene (or takes them as objects), fits each slip condition by least
 squares (:mod:`.lsq`), computes intervals (:mod:`.summary`), compares the conditions
 (:mod:`.selection`) and returns a frozen :class:`~.result.FitResult`.  The second condition is also
-started from the first one's optimum (the two optima are usually close).
+started from the first one's optimum (the two optima are usually close).  The membrane model
+(DESIGN.md A6) is decided after the large-stretch fits, and the exact membrane refines them
+(:mod:`.membrane_choice`, :mod:`.membrane_fit`).
 """
 from __future__ import annotations
 
