@@ -10,7 +10,7 @@ and reuses the last histories (the force offset needs no new history).
 """
 from __future__ import annotations
 
-from ..errors import AdhfitError
+from ..errors import AdhfitError, ConvergenceError
 from .lsq import RawFit, minimise, residual_function
 from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
 from .model import CurveModel, ModelDomainError
@@ -53,8 +53,22 @@ def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
             best = res
         if best.covar is not None and best.success:
             break  # the corrected start converged: the plain one would cost as much again
+    if not _computable(exact, par.si(best.params)):  # every step was outside the exact model's domain
+        raise ConvergenceError(
+            f"the exact-membrane fit ({m.slip}, λ0 = {m.scene.prestretch:g}) from the large-stretch optimum "
+            f"(W_ad = {si['work_of_adhesion']:.4g} J/m^2, μh = {si['mu_h']:.4g} N/m)",
+            {"hint": "no exact history there (Case I only: the membrane must not turn past vertical at the "
+                     "clamp); --membrane large-stretch fits the approximation"})
     return RawFit(slip=raw.slip, best=best, model=exact, par=par, scale=raw.scale, sigma_given=raw.sigma_given,
                   starts=list(raw.starts) + tried)
+
+
+def _computable(model: CurveModel, s: dict) -> bool:
+    try:
+        model.pieces(s["work_of_adhesion"], s["mu_h"], s["x_offset"])
+    except ModelDomainError:
+        return False
+    return True
 
 
 def _sigma(raw: RawFit) -> float:
