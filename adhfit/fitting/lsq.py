@@ -24,6 +24,7 @@ and after pull-off pin it).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -177,6 +178,9 @@ class RawFit:
     sigma_given : bool
     starts : list of dict
         Each start (SI) with the χ² it reached.
+    alternatives : tuple of dict
+        The optima (SI) with the pull-off at a neighbouring row, and their χ² above the best
+        (``dchisqr``, residual units): the ones the data cannot reject widen the intervals.
     """
 
     slip: str
@@ -186,6 +190,7 @@ class RawFit:
     scale: float
     sigma_given: bool
     starts: list
+    alternatives: tuple = ()
 
 
 def _perturbed(start: Start, par: Parametrisation) -> list[Start]:
@@ -282,14 +287,12 @@ def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start
         return raw
     if j is None or j >= m.x.size - 1 or j <= m.segments.i_turn + 1:
         return raw
-    best = None
-    for cand in (j, j - 1, j + 1):  # the free split can stop one row off: let χ² pick among neighbours
-        if not m.segments.i_turn + 1 < cand < m.x.size:
-            continue
-        fit = _fixed_fit(raw, cand, sigma, sigma_est, base, si)
-        if best is None or fit.best.chisqr < best.best.chisqr:
-            best = fit
-    return best
+    fits = [_fixed_fit(raw, cand, sigma, sigma_est, base, si) for cand in (j, j - 1, j + 1)
+            if m.segments.i_turn + 1 < cand < m.x.size]  # the free split can stop one row off
+    best = min(fits, key=lambda f: f.best.chisqr)
+    alts = tuple(dict(f.par.si(f.best.params), dchisqr=float(f.best.chisqr - best.best.chisqr),
+                      split=f.model.segments.i_jump) for f in fits if f is not best)
+    return dataclasses.replace(best, alternatives=alts)
 
 
 def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict) -> RawFit:

@@ -9,6 +9,7 @@ parameter, so log-normal for W_ad and μh).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -16,7 +17,7 @@ from scipy import stats
 
 from .lsq import RawFit, residual_function
 from .model import ModelDomainError
-from .profile import one_side
+from .profile import critical_value, one_side
 from .residual_checks import correlation_factor, widen, zero_drift
 from .result import Estimate, SlipFit
 from .selection import information_criteria
@@ -156,6 +157,30 @@ def _warnings(raw: RawFit, est: dict, sigma: float, rho: float, factor: float, s
     return out
 
 
+def _split_hull(raw: RawFit, est: dict) -> dict:
+    """Widen W_ad's and μh's intervals to cover the optima with the pull-off one row earlier or later
+    when the data cannot reject them (Δχ² below the profile's critical value): at a few per cent noise
+    the detachment row itself can be uncertain, and each row's fit alone knows only its own row."""
+    best = raw.best
+    n_free = int(best.ndata - best.nvarys)
+    s2 = 1.0 if raw.sigma_given else best.chisqr / max(n_free, 1)
+    crit = critical_value(n_free, raw.sigma_given)
+    out = dict(est)
+    for alt in raw.alternatives:
+        if alt["dchisqr"] / s2 >= crit:
+            continue
+        for name in ("work_of_adhesion", "mu_h"):
+            e = out[name]
+            if e.status != "determined" or e.ci95 is None or not e.value:
+                continue
+            r = alt[name] / e.value
+            lo, hi = min(e.ci95[0], e.ci95[0] * r), max(e.ci95[1], e.ci95[1] * r)
+            if (lo, hi) != tuple(e.ci95):
+                out[name] = dataclasses.replace(e, ci95=(lo, hi), ci_method=f"{e.ci_method} (hull over the "
+                                                "pull-off rows the data allow)")
+    return out
+
+
 def _profile(residual, best, name: str, sigma_given: bool):
     """(lower, upper) profile limits; when one side is open, the other is the one-sided 95 % bound
     (the two-sided 90 % limit).  The upper side goes first: it is the one a test stopped before
@@ -177,7 +202,7 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
     if profile:  # without a covariance the profile still works, from a 10 % first step
         for name in ("work_of_adhesion", "mu_h"):
             profiles[name] = _profile(residual, best, INTERNAL[name], raw.sigma_given)
-    est = _estimates(raw, profiles)
+    est = _split_hull(raw, _estimates(raw, profiles))
     si = par.si(best.params)
     try:
         predicted = m.predict(si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"])
