@@ -60,7 +60,16 @@ def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
             {"hint": "no exact history there (Case I only: the membrane must not turn past vertical at the "
                      "clamp); --membrane large-stretch fits the approximation"})
     return RawFit(slip=raw.slip, best=best, model=exact, par=par, scale=raw.scale, sigma_given=raw.sigma_given,
-                  starts=list(raw.starts) + tried)
+                  starts=list(raw.starts) + tried, alternatives=_alternatives(raw, par.si(best.params)))
+
+
+def _alternatives(raw: RawFit, exact_si: dict) -> tuple:
+    """The large-stretch fit's optima with pull-off one row earlier/later, carried over to the exact fit
+    as relative shifts (the Δχ² between rows is set by the data's rows near the jump, not by the
+    membrane model; refitting them exactly would cost two more exact fits)."""
+    ls = raw.par.si(raw.best.params)
+    return tuple(dict(alt, **{k: exact_si[k] * alt[k] / ls[k] for k in ("work_of_adhesion", "mu_h")})
+                 for alt in raw.alternatives)
 
 
 def _computable(model: CurveModel, s: dict) -> bool:
