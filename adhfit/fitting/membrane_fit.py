@@ -114,9 +114,10 @@ def choose_and_refit(raws: dict[str, RawFit], scene, membrane: str) -> tuple[dic
 
 
 def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str | None:
-    """The sentence a large-stretch report adds: the approximation's estimated effect at the user's λ0."""
+    """The warning a large-stretch fit adds when the data resolve the approximation's error: its estimated
+    effect at the user's λ0 (``None`` otherwise; the ``model`` entry always gives the numbers)."""
     e = effects.get(slip)
-    if e is None:
+    if e is None or not e.resolved():  # below what the data resolve: report.json ``model`` says so
         return None
     return (f"The large-stretch approximation (paper eq. 10) at λ0 = {lambda0:g}: fitting it to the exact "
             f"membrane's curve at these values shifts W_ad by {100 * e.shift['work_of_adhesion']:+.2g} % and μh by "
