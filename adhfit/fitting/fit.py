@@ -87,7 +87,7 @@ def _warnings(scene, fits, verdict, curve, reported, model_info, effects) -> tup
     """(warnings, diagnostics): plain sentences for a lab user, and solver details."""
     from .membrane_fit import effect_warning  # noqa: PLC0415
     note = effect_warning(effects, verdict["parameters_from"], scene.prestretch)
-    out = [note] if note else [] if effects else list(scene.warnings())
+    out = [] if model_info["membrane"] == "exact" else [note] if note else [] if effects else list(scene.warnings())
     rep = fits[verdict["parameters_from"]]
     out += list(rep.warnings)
     diag = [f"[{s}] {d}" for s, f in fits.items() for d in f.diagnostics]

@@ -10,6 +10,8 @@ and reuses the last histories (the force offset needs no new history).
 """
 from __future__ import annotations
 
+import math
+
 from ..errors import AdhfitError, ConvergenceError
 from .lsq import RawFit, minimise, residual_function
 from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
@@ -24,6 +26,9 @@ MAX_NFEV = 60
 #: ~1e-2 of their standard errors at 0.5 % noise, and 1e-5 of χ² is ~1e-3 on a few hundred rows, far
 #: below what the slip comparison (ΔBIC of units) needs; FINE_TOL (1e-8) cost ~4x the histories
 EXACT_TOL = 1e-5
+#: standard error of ln W_ad or ln μh above which an exact fit's covariance interval is not trusted
+#: (the log-normal interval is then far from the likelihood's shape): profile instead
+MAX_COVARIANCE_SE = 0.2
 
 
 def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
@@ -127,12 +132,18 @@ def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str
 
 def wants_profile(raw: RawFit, model: dict) -> bool:
     """Whether the reported fit needs likelihood profiles: always with the large-stretch membrane
-    (cheap); with the exact one only without a covariance or when the optimum sits on the kink at the
-    turning point, where the covariance is fragile (DESIGN.md B4)."""
+    (cheap); with the exact one when the covariance is missing or wide (standard error of ln W_ad or
+    ln μh above :data:`MAX_COVARIANCE_SE`), when the data end before pull-off (W_ad is then bounded from
+    one side) or when the optimum sits on the kink at the turning point (DESIGN.md B4)."""
     if model["membrane"] != "exact" or raw.best.covar is None:
         return True
+    for name in ("ln_work_of_adhesion", "ln_mu_h"):  # a wide or missing covariance interval is not trusted
+        se = raw.best.params[name].stderr
+        if se is None or not math.isfinite(se) or se > MAX_COVARIANCE_SE:
+            return True
     si = raw.par.si(raw.best.params)
     try:
-        return raw.model.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+        return (raw.model.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"]) is None  # no pull-off
+                or raw.model.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"]))
     except ModelDomainError:
         return True
