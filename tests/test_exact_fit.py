@@ -147,6 +147,21 @@ def test_exact_fit_recovers_lambda0_1_2_frictionless_cli(tmp_path, capsys):
         assert abs(p["value"] / truth[name] - 1.0) < 0.02 and p["ci95"][0] <= truth[name] <= p["ci95"][1], p
 
 
+def test_exact_fit_of_a_test_stopped_before_pull_off():
+    """Unloading stops inside pinning: the exact fit profiles (its covariance says nothing about W_ad)
+    and reports a one-sided W_ad bound below the truth, never an invented value; μh stays determined."""
+    from adhfit.data import Curve
+    c, truth = exact_curve(1.5, "no-slip", noise=0.005, seed=3)
+    end = c.i_turn + 60
+    cut = Curve(path="<cut>", control=c.control, x=c.x[:end], force=c.force[:end], line=c.line[:end],
+                i_turn=c.i_turn)
+    res = fit_curve(cut, scene(1.5), slip="no-slip")
+    assert res.model["membrane"] == "exact"
+    w, mu = res.parameters["work_of_adhesion"], res.parameters["mu_h"]
+    assert w.status in ("lower_bound", "undetermined") and (w.ci95 is None or w.ci95[0] <= truth["work_of_adhesion"])
+    assert mu.status == "determined" and mu.ci95[0] <= truth["mu_h"] <= mu.ci95[1]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("noise", [0.005, 0.01])
 @pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
