@@ -20,15 +20,16 @@ from .errors import DataError, InputError
 from .params import A_MAX_OVER_RS, DIMENSIONLESS, FITTED
 from .units import DIMENSIONS, GROUPS, Scales, parse_quantity
 
-__all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "LAYOUT", "PRIOR_DISTS"]
+__all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMBRANE_MODELS", "LAYOUT", "PRIOR_DISTS"]
 
 CONTROLS = ("displacement", "pressure")
 SLIPS = ("auto", "no-slip", "frictionless")
+MEMBRANE_MODELS = ("auto", "large-stretch", "exact")  # of a fit (DESIGN.md A6)
 
 #: TOML layout (DESIGN.md A3): section -> key -> (Scene field, dimension or None for a word).
 LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {
     "membrane": {"radius": ("membrane_radius", "length"), "prestretch": ("prestretch", "dimensionless"),
-                 "mu_h": ("mu_h", "force_per_length")},
+                 "mu_h": ("mu_h", "force_per_length"), "model": ("membrane_model", None)},
     "substrate": {"radius": ("substrate_radius", "length")},
     "test": {"control": ("control", None), "pressure": ("pressure", "pressure"), "gap": ("gap", "length"),
              "contact_radius_max": ("contact_radius_max", "length"), "pressure_max": ("pressure_max",
@@ -64,7 +65,7 @@ class Scene:
     control : {"displacement", "pressure"}
         Which quantity the test drives.
     prestretch : float
-        Equibiaxial pre-stretch λ0 > 1.  Observables do not depend on it; see :meth:`warnings`.
+        Equibiaxial pre-stretch λ0 > 1: cancels under the large-stretch approximation, not for the exact membrane.
     mu_h : float or str, optional
         Membrane stiffness μh, N/m; ``None`` when it is to be fitted.
     pressure : float or str, optional
@@ -78,6 +79,8 @@ class Scene:
     contact_radius_max, displacement_max, pressure_max : float or str, optional
         At most one loading end for simulations: the largest contact radius (m), contact
         displacement δ (m, displacement control) or pressure (Pa, pressure control) on loading.
+    membrane_model : {"auto", "large-stretch", "exact"}
+        ``[membrane] model`` of a fit; ``"auto"``: exact where the data resolve the approximation's error.
     priors : dict, optional
         ``{parameter: {"dist": ..., ...}}`` for fitted parameters, see :func:`normalize_priors`.
     source : str, optional
@@ -99,12 +102,13 @@ class Scene:
     contact_radius_max: float | None = None
     displacement_max: float | None = None
     pressure_max: float | None = None
+    membrane_model: str = "auto"
     priors: dict[str, dict[str, Any]] = field(default_factory=dict, hash=False)
     source: str | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         set_ = functools.partial(object.__setattr__, self)  # frozen: normalise fields in place
-        for key, choices in (("control", CONTROLS), ("slip", SLIPS)):
+        for key, choices in (("control", CONTROLS), ("slip", SLIPS), ("membrane_model", MEMBRANE_MODELS)):
             if getattr(self, key) not in choices:
                 raise InputError(key, getattr(self, key), "one of " + ", ".join(map(repr, choices)))
         for key, dim in _DIMENSION.items():

@@ -43,7 +43,7 @@ def _toml(fields: dict) -> str:
     fixed = (f'pressure = "{fields["pressure"]}"        # the fixed pressure' if "pressure" in fields
              else f'gap = "{fields["gap"]}"               # the fixed gap, clamped edge to substrate apex')
     return (f'# synthetic sample (sample_data/make_samples.py); mu_h and W_ad are left to the fit\n'
-            f'[membrane]\nradius = "{fields["membrane_radius"]}"\nprestretch = 2.0\n\n'
+            f'[membrane]\nradius = "{fields["membrane_radius"]}"\nprestretch = 2.0\nmodel = "large-stretch"       # the curves were made with the large-stretch model\n\n'
             f'[substrate]\nradius = "{rs}"\n\n[test]\ncontrol = "{fields["control"]}"\n{fixed}\n\n'
             f'[interface]\nslip = "auto"\n')
 

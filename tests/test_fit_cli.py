@@ -14,6 +14,7 @@ CASE = SAMPLES / "flat_displacement_no-slip"   # the fastest sample to fit (~5 s
 SCENE = """[membrane]
 radius = "2 mm"
 prestretch = 2.0
+model = "large-stretch"
 [substrate]
 radius = "1 mm"
 [test]

@@ -4,6 +4,7 @@ stopping rule, runs are reproducible from the seed, chains land in HDF5, and the
 report what they should.  Kept small for CI: toy targets and tiny chains on the real model."""
 from __future__ import annotations
 
+import functools
 import json
 import math
 
@@ -87,7 +88,8 @@ def small_fit(tmp_path_factory):
     from adhfit.fitting.mcmc_fit import fit_curve_mcmc
     from adhfit.fitting.synthetic import synthetic_curve
     from adhfit.scene import Scene
-    scene = Scene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa",
+    LsScene = functools.partial(Scene, membrane_model="large-stretch")
+    scene = LsScene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa",
                   slip="auto")
     curve, truth = synthetic_curve(scene, "no-slip", work_of_adhesion=0.4, mu_h=2.0, x_max=6e-4, rows=80,
                                    noise=0.005, x_offset=2e-5, rng=np.random.default_rng(3))
@@ -142,7 +144,8 @@ def test_same_residual_as_least_squares(small_fit):
 
 def _scene():
     from adhfit.scene import Scene
-    return Scene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa",
+    LsScene = functools.partial(Scene, membrane_model="large-stretch")
+    return LsScene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa",
                  slip="auto")
 
 

@@ -15,6 +15,9 @@ from pathlib import Path
 from ..errors import InputError
 from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
 
+#: ``--membrane`` choices (adhfit.scene.MEMBRANE_MODELS; repeated here to keep the parser's imports light)
+MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
+
 __all__ = ["add_fit_arguments", "read_options", "run_fit", "check_output_dir", "start_engine", "write_reports"]
 
 
@@ -95,6 +98,9 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit the displacement offset (displacement control)")
     p.add_argument("--pressure-offset", action="store_true", help="fit a pressure offset (pressure control)")
+    p.add_argument("--membrane", choices=MEMBRANE_CHOICES, default=None,
+                   help="membrane model: large-stretch (the paper's), exact (neo-Hookean, slower), auto (exact "
+                        "where the data resolve the difference); default: the scene's [membrane] model (auto)")
     p.add_argument("--points", type=_points, default=DEFAULT_POINTS, help="rows per computed history")
     p.add_argument("--no-profile", action="store_true", help="covariance intervals only (faster)")
     p.add_argument("--no-plot", action="store_true", help="do not write fit.png")
@@ -206,7 +212,8 @@ def run_fit(args) -> int:
     with elapsed(f"fitting {Path(args.data).name}", enabled=False if quiet else None):
         result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
                            fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
-                           seed=args.seed, points=args.points, profile=not args.no_profile)
+                           seed=args.seed, points=args.points, profile=not args.no_profile,
+                           membrane=getattr(args, "membrane", None))
     write_reports(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
     print(_summary(result, out))
     return 0
@@ -242,6 +249,8 @@ def _fmt_estimate(name: str, e) -> str:
 def _summary(result, out: Path) -> str:
     d = result.as_dict()
     lines = [f"slip: {d['slip'].get('verdict')}"]
+    if d.get("model"):
+        lines.append(f"membrane: {d['model']['membrane']} ({d['model']['why']})")
     shown = dict(d.get("parameters", {}))
     for name, e in shown.items():
         lines.append(_fmt_estimate(name, e))

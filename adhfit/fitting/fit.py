@@ -3,7 +3,9 @@
 One call reads the data and the scene (or takes them as objects), fits each slip condition by least
 squares (:mod:`.lsq`), computes intervals (:mod:`.summary`), compares the conditions
 (:mod:`.selection`) and returns a frozen :class:`~.result.FitResult`.  The second condition is also
-started from the first one's optimum (the two optima are usually close).
+started from the first one's optimum (the two optima are usually close).  The membrane model
+(DESIGN.md A6) is decided after the large-stretch fits, and the exact membrane refines them
+(:mod:`.membrane_choice`, :mod:`.membrane_fit`).
 """
 from __future__ import annotations
 
@@ -40,7 +42,10 @@ def _inputs(data, scene, read_options=None):
     return curve, scene
 
 
-def _check_options(method, slip, sigma, points):
+def _check_options(method, slip, sigma, points, membrane="auto"):
+    from ..scene import MEMBRANE_MODELS  # noqa: PLC0415
+    if membrane not in MEMBRANE_MODELS:
+        raise InputError("membrane", membrane, "one of " + ", ".join(map(repr, MEMBRANE_MODELS)))
     if method == "mcmc":
         raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
     if method not in METHODS:
@@ -78,9 +83,11 @@ def _reported(fits: dict[str, SlipFit], verdict: dict) -> dict[str, Estimate]:
             for name, e in chosen.parameters.items()}
 
 
-def _warnings(scene, fits, verdict, curve, reported) -> tuple[list[str], list[str]]:
+def _warnings(scene, fits, verdict, curve, reported, model_info, effects) -> tuple[list[str], list[str]]:
     """(warnings, diagnostics): plain sentences for a lab user, and solver details."""
-    out = list(scene.warnings())
+    from .membrane_fit import effect_warning  # noqa: PLC0415
+    note = effect_warning(effects, verdict["parameters_from"], scene.prestretch)
+    out = [] if model_info["membrane"] == "exact" else [note] if note else [] if effects else list(scene.warnings())
     rep = fits[verdict["parameters_from"]]
     out += list(rep.warnings)
     diag = [f"[{s}] {d}" for s, f in fits.items() for d in f.diagnostics]
@@ -137,7 +144,8 @@ def _provenance(curve, scene, seed, method, options) -> dict:
 
 def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
               fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
-              points: int = DEFAULT_POINTS, profile: bool = True, read_options: dict | None = None) -> FitResult:
+              points: int = DEFAULT_POINTS, profile: bool = True, membrane: str | None = None,
+              read_options: dict | None = None) -> FitResult:
     """Fit W_ad, μh and the slip condition to a measured curve.
 
     Parameters
@@ -163,7 +171,13 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         Rows per computed history.
     profile : bool
         Compute likelihood-profile intervals of W_ad and μh of the reported fit; the other fit's
-        intervals are from its covariance (an undecided verdict reports the hull of both).
+        intervals are from its covariance (an undecided verdict reports the hull of both).  An exact
+        fit profiles only when its optimum sits on the kink at the turning point (elsewhere its
+        covariance is trustworthy, and a profile costs ~30 exact histories).
+    membrane : {"auto", "large-stretch", "exact"}, optional
+        Default: the scene's ``[membrane] model``.  The large-stretch fit always runs first; ``exact``
+        refines it with the exact membrane, ``auto`` does so when the data resolve the approximation's
+        error (:mod:`.membrane_choice`).  ``report.json`` ``model`` says which ran and why.
     read_options : dict, optional
         Keywords for :func:`adhfit.data.read_curve` when ``data`` is a path: ``columns``, ``units``,
         ``force_sign``, ``displacement_sign``.
@@ -177,7 +191,8 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     from .plausibility import check_curve  # noqa: PLC0415
     curve, checks = check_curve(curve, scene)  # repeated rows left out; absurd data raise here
     slip = scene.slip if slip is None else slip
-    _check_options(method, slip, sigma, points)
+    membrane = scene.membrane_model if membrane is None else membrane
+    _check_options(method, slip, sigma, points, membrane)
     slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
     seg = segment(curve)
     raws = {}
@@ -186,10 +201,13 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         extra = [r.par.si(r.best.params) for r in raws.values()]
         raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
                            extra_starts=extra)
+    from .membrane_fit import choose_and_refit, wants_profile  # noqa: PLC0415
+    raws, model_info, effects = choose_and_refit(raws, scene, membrane)
     # profiles cost ~2/3 of a fit: compute them only for the fit whose estimates are reported
     fits = {s: summarize(r, profile=False) for s, r in raws.items()}
     verdict = _decide(fits)
-    if profile:  # the reported fit only; an undecided verdict hulls with the other's covariance interval
+    # the reported fit only; an undecided verdict hulls with the other's covariance interval
+    if profile and wants_profile(raws[verdict["parameters_from"]], model_info):
         wanted = verdict["parameters_from"]
         fits[wanted] = summarize(raws[wanted], profile=True)
         if len(fits) > 1 and verdict["selected"] is None and \
@@ -202,9 +220,9 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
             verdict = dict(verdict, parameters_from=wanted)
     rep = fits[verdict["parameters_from"]]
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
-               "fit_force_offset": fit_force_offset, "points": points, "profile": profile}
+               "fit_force_offset": fit_force_offset, "points": points, "profile": profile, "membrane": membrane}
     reported = _reported(fits, verdict)
-    warnings, diagnostics = _warnings(scene, fits, verdict, curve, reported)
+    warnings, diagnostics = _warnings(scene, fits, verdict, curve, reported, model_info, effects)
     return FitResult(
         method=method, slip=verdict, parameters=reported, fits=fits,
         n_points=len(curve.x), n_excluded=len(curve.excluded), sigma=rep.sigma,
@@ -213,4 +231,4 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         n_evaluations=sum(f.n_evaluations for f in fits.values()),
         n_histories=sum(f.n_histories for f in fits.values()), wall_time=time.perf_counter() - t0,
         provenance=_provenance(curve, scene, seed, method, options), segments=_segments(seg, rep),
-        excluded=tuple(curve.excluded), curve=curve, raw={s: f.raw for s, f in fits.items()})
+        excluded=tuple(curve.excluded), curve=curve, raw={s: f.raw for s, f in fits.items()}, model=model_info)

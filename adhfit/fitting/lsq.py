@@ -299,7 +299,8 @@ def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base:
     """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
     m, par, f = raw.model, raw.par, raw.model.force
     seg = Segments(n=m.segments.n, i_turn=m.segments.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
-    fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True)
+    fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True,
+                       membrane=m.membrane)
     fixed.n_histories, fixed.n_evaluations = m.n_histories, m.n_evaluations  # the cost of stage 1 too
     residual = residual_function(fixed, par, raw.scale, sigma_est)
     best, starts = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None)

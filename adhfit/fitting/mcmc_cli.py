@@ -26,7 +26,8 @@ def run_fit_mcmc(args) -> int:
     out.mkdir(parents=True, exist_ok=True)  # the chains are written while sampling
     result = fit_curve_mcmc(curve, scene, slip=args.slip, sigma=sigma,
                             fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
-                            seed=args.seed, points=args.points, outdir=out, progress=False if quiet else None)
+                            seed=args.seed, points=args.points, outdir=out, progress=False if quiet else None,
+                            membrane=getattr(args, "membrane", None))
     images = {}
     if not args.no_plot:
         from ..report.mcmc_plots import plot_corner, plot_predictive  # noqa: PLC0415

@@ -179,7 +179,7 @@ def _verdict(probs: dict, lsq_verdict: dict) -> dict:
 def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
                    fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
                    points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
-                   progress: bool | None = None, **settings) -> McmcFitResult:
+                   progress: bool | None = None, membrane: str | None = None, **settings) -> McmcFitResult:
     """Bayesian fit of W_ad, μh (and offsets) under each slip condition, and the slip condition's probability.
 
     Parameters
@@ -195,6 +195,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         Processes for likelihood evaluations (default: up to 2).  Results do not depend on it.
     progress : bool, optional
         tqdm bar on standard error (default: only on a terminal).
+    membrane : {"auto", "large-stretch", "exact"}, optional
+        As for :func:`adhfit.fitting.fit.fit_curve` (the sampler then uses the chosen membrane).
     **settings
         Override :data:`DEFAULTS` (``n_walkers``, ``n_ensembles``, ``tune_steps``, ``check_every``,
         ``max_steps``, ``evidence_draws``, ``predictive_draws``).
@@ -213,7 +215,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     from .plausibility import check_curve  # noqa: PLC0415
     curve, checks = check_curve(curve, scene)  # the same checks as a least-squares fit
     slip = scene.slip if slip is None else slip
-    _check_options("lsq", slip, sigma, points)
+    membrane = scene.membrane_model if membrane is None else membrane
+    _check_options("lsq", slip, sigma, points, membrane)
     seed = int(np.random.SeedSequence().entropy % 2**63) if seed is None else int(seed)
     root = np.random.SeedSequence(seed)
     slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
@@ -223,6 +226,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         model = CurveModel(curve, scene, s, points=points, segments=seg)
         raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
                            extra_starts=[r.par.si(r.best.params) for r in raws.values()])
+    from .membrane_fit import choose_and_refit  # noqa: PLC0415
+    raws, model_info, _ = choose_and_refit(raws, scene, membrane)
     lsq_fits = {s: summarize(r, profile=False) for s, r in raws.items()}
     lsq_verdict = compare({s: f.bic for s, f in lsq_fits.items()}, {s: f.aic for s, f in lsq_fits.items()})
     t_lsq = time.perf_counter() - t0
@@ -275,7 +280,7 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     band["slip"] = rep
     wall = time.perf_counter() - t0
     converged = all(d["converged"] for d in diags.values())
-    warn = list(scene.warnings())
+    warn = list(scene.warnings()) if model_info["membrane"] != "exact" else []
     if not converged:
         warn.append("MCMC NOT CONVERGED for: " + ", ".join(s for s, d in diags.items() if not d["converged"])
                     + " — do not trust these intervals (see the diagnostics)")
@@ -309,7 +314,7 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         "evaluations_per_second": mc_evals / mc_time if mc_time > 0 else None,
     }
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
-               "fit_force_offset": fit_force_offset, "points": points} | cfg
+               "fit_force_offset": fit_force_offset, "points": points, "membrane": membrane} | cfg
     rep_fit = fits[rep]
     return McmcFitResult(
         method="mcmc", slip=verdict, parameters=reported, fits=fits, n_points=len(curve.x),
@@ -320,4 +325,4 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         n_histories=sum(f.n_histories for f in lsq_fits.values()), wall_time=wall,
         provenance=_provenance(curve, scene, seed, "mcmc", options), segments=_segments(seg, lsq_fits[rep]),
         excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), mcmc=summary,
-        samples=samples, predictive=band)
+        samples=samples, predictive=band, model=model_info)

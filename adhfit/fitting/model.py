@@ -170,6 +170,8 @@ class CurveModel:
         Rows per computed history.
     segments : Segments, optional
         Row-order segments; found with :func:`segment` when not given.
+    membrane : {"large-stretch", "exact"}
+        The forward model (:func:`adhfit.simulate`'s ``membrane``); ``"exact"`` uses the scene's λ0.
 
     Notes
     -----
@@ -178,13 +180,14 @@ class CurveModel:
     """
 
     def __init__(self, curve, scene, slip: str, *, points: int = DEFAULT_POINTS,
-                 segments: Segments | None = None, fixed_split: bool = False) -> None:
+                 segments: Segments | None = None, fixed_split: bool = False,
+                 membrane: str = "large-stretch") -> None:
         if slip not in ("no-slip", "frictionless"):
             raise InputError("slip", slip, "one of 'no-slip', 'frictionless'")
         if curve.control != scene.control:
             raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
         self.curve, self.scene, self.slip, self.points = curve, scene, slip, int(points)
-        self.control = scene.control
+        self.control, self.membrane = scene.control, membrane  # "large-stretch" or "exact" (simulate's)
         self.segments = segments if segments is not None else segment(curve)
         self.x = np.asarray(curve.x, float)
         self.force = np.asarray(curve.force, float)
@@ -231,7 +234,7 @@ class CurveModel:
         for extra in RETRY_POINTS:
             try:
                 self.n_histories += 1
-                pcs = pieces_from_frame(simulate(**kw, points=self.points + extra).frame, self.control)
+                pcs = pieces_from_frame(simulate(**kw, points=self.points + extra, membrane=self.membrane).frame, self.control)
                 break
             except (AdhfitError, ValueError, IndexError) as err:
                 failure = err

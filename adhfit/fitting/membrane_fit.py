@@ -1,0 +1,149 @@
+"""Least-squares fits with the exact neo-Hookean membrane, refined from the large-stretch fits.
+
+An exact history costs ~10²–10³ times a large-stretch one, so the exact fit does not search: every
+slip condition is first fitted with the large-stretch membrane (starts, the free then fixed row
+split), then :func:`.membrane_choice.approximation_effect` computes the exact force at that optimum
+and the shift the approximation causes, and the exact fit starts from the large-stretch optimum
+corrected by that shift — usually within a fraction of a standard error of the exact optimum, so a
+few trust-region steps finish it.  It keeps the large-stretch fit's row split (the detachment row),
+and reuses the last histories (the force offset needs no new history).
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import AdhfitError, ConvergenceError
+from .lsq import RawFit, minimise, residual_function
+from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
+from .model import CurveModel, ModelDomainError
+from .starts import Start, noise_estimate
+
+__all__ = ["choose_and_refit", "exact_refit", "wants_profile", "effect_warning"]
+
+#: trust-region evaluations allowed to an exact refinement (each new parameter set is one history)
+MAX_NFEV = 60
+#: optimiser tolerance (scipy ftol = xtol = gtol) of the exact refinement: 1e-5 of ln W_ad, ln μh is
+#: ~1e-2 of their standard errors at 0.5 % noise, and 1e-5 of χ² is ~1e-3 on a few hundred rows, far
+#: below what the slip comparison (ΔBIC of units) needs; FINE_TOL (1e-8) cost ~4x the histories
+EXACT_TOL = 1e-5
+#: standard error of ln W_ad or ln μh above which an exact fit's covariance interval is not trusted
+#: (the log-normal interval is then far from the likelihood's shape): profile instead
+MAX_COVARIANCE_SE = 0.2
+
+
+def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
+    """The exact-membrane least-squares fit of one slip condition, started from ``raw`` (large-stretch).
+
+    Parameters
+    ----------
+    raw : RawFit
+        The large-stretch fit of this slip condition.
+    effect : Effect, optional
+        Its approximation effect; its corrected start is used when given.
+    """
+    m, par = raw.model, raw.par
+    exact = CurveModel(m.curve, m.scene, m.slip, points=EXACT_POINTS, segments=m.segments,
+                       fixed_split=m.fixed_split, membrane="exact")
+    exact.n_histories, exact.n_evaluations = m.n_histories, m.n_evaluations
+    sigma_est = raw.scale if raw.sigma_given else (noise_estimate(m.force) or 1e-3 * par.f_scale)
+    residual = residual_function(exact, par, raw.scale, sigma_est)
+    si = par.si(raw.best.params)
+    starts = [Start(effect.start)] if effect is not None else []
+    starts.append(Start(si))
+    best, tried = None, []
+    for s in starts:
+        res = minimise(residual, par.params(s), scale_covar=not raw.sigma_given, max_nfev=MAX_NFEV, tol=EXACT_TOL)
+        tried.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr), "membrane": "exact"})
+        if best is None or res.chisqr < best.chisqr:
+            best = res
+        if best.covar is not None and best.success:
+            break  # the corrected start converged: the plain one would cost as much again
+    if not _computable(exact, par.si(best.params)):  # every step was outside the exact model's domain
+        raise ConvergenceError(
+            f"the exact-membrane fit ({m.slip}, λ0 = {m.scene.prestretch:g}) from the large-stretch optimum "
+            f"(W_ad = {si['work_of_adhesion']:.4g} J/m^2, μh = {si['mu_h']:.4g} N/m)",
+            {"hint": "no exact history there (Case I only: the membrane must not turn past vertical at the "
+                     "clamp); --membrane large-stretch fits the approximation"})
+    return RawFit(slip=raw.slip, best=best, model=exact, par=par, scale=raw.scale, sigma_given=raw.sigma_given,
+                  starts=list(raw.starts) + tried, alternatives=_alternatives(raw, par.si(best.params)))
+
+
+def _alternatives(raw: RawFit, exact_si: dict) -> tuple:
+    """The large-stretch fit's optima with pull-off one row earlier/later, carried over to the exact fit
+    as relative shifts (the Δχ² between rows is set by the data's rows near the jump, not by the
+    membrane model; refitting them exactly would cost two more exact fits)."""
+    ls = raw.par.si(raw.best.params)
+    return tuple(dict(alt, **{k: exact_si[k] * alt[k] / ls[k] for k in ("work_of_adhesion", "mu_h")})
+                 for alt in raw.alternatives)
+
+
+def _computable(model: CurveModel, s: dict) -> bool:
+    try:
+        model.pieces(s["work_of_adhesion"], s["mu_h"], s["x_offset"])
+    except ModelDomainError:
+        return False
+    return True
+
+
+def _sigma(raw: RawFit) -> float:
+    return raw.scale if raw.sigma_given else raw.scale * float(raw.best.redchi) ** 0.5
+
+
+def choose_and_refit(raws: dict[str, RawFit], scene, membrane: str) -> tuple[dict[str, RawFit], dict, dict]:
+    """Decide the membrane model and, for the exact one, refit every slip condition with it.
+
+    Parameters
+    ----------
+    raws : dict slip -> RawFit
+        The large-stretch fits.
+    scene : adhfit.scene.Scene
+    membrane : {"auto", "large-stretch", "exact"}
+
+    Returns
+    -------
+    (raws, model, effects)
+        The fits to report (exact or the given ones), the report's ``model`` entry, and the
+        :class:`~.membrane_choice.Effect` per slip condition (empty when the exact membrane failed).
+    """
+    effects = {}
+    for s, raw in raws.items():
+        try:
+            effects[s] = approximation_effect(raw, _sigma(raw))
+        except (ModelDomainError, AdhfitError, ValueError):
+            continue
+    model = decide(effects, scene.prestretch, membrane)
+    if model["membrane"] != "exact":
+        return raws, model, effects
+    out = {s: exact_refit(raw, effects.get(s)) for s, raw in raws.items()}
+    return out, model, effects
+
+
+def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str | None:
+    """The warning a large-stretch fit adds when the data resolve the approximation's error: its estimated
+    effect at the user's λ0 (``None`` otherwise; the ``model`` entry always gives the numbers)."""
+    e = effects.get(slip)
+    if e is None or not e.resolved():  # below what the data resolve: report.json ``model`` says so
+        return None
+    return (f"The large-stretch approximation (paper eq. 10) at λ0 = {lambda0:g}: fitting it to the exact "
+            f"membrane's curve at these values shifts W_ad by {100 * e.shift['work_of_adhesion']:+.2g} % and μh by "
+            f"{100 * e.shift['mu_h']:+.2g} % (largest force error {e.force_error / e.sigma:.2g} σ); "
+            f"use --membrane exact to remove it.")
+
+
+def wants_profile(raw: RawFit, model: dict) -> bool:
+    """Whether the reported fit needs likelihood profiles: always with the large-stretch membrane
+    (cheap); with the exact one when the covariance is missing or wide (standard error of ln W_ad or
+    ln μh above :data:`MAX_COVARIANCE_SE`), when the data end before pull-off (W_ad is then bounded from
+    one side) or when the optimum sits on the kink at the turning point (DESIGN.md B4)."""
+    if model["membrane"] != "exact" or raw.best.covar is None:
+        return True
+    for name in ("ln_work_of_adhesion", "ln_mu_h"):  # a wide or missing covariance interval is not trusted
+        se = raw.best.params[name].stderr
+        if se is None or not math.isfinite(se) or se > MAX_COVARIANCE_SE:
+            return True
+    si = raw.par.si(raw.best.params)
+    try:
+        return (raw.model.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"]) is None  # no pull-off
+                or raw.model.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"]))
+    except ModelDomainError:
+        return True
