@@ -17,7 +17,7 @@ from scipy import stats
 
 from .lsq import RawFit, residual_function
 from .model import ModelDomainError
-from .profile import critical_value, one_side
+from .profile import ProfileLimit, critical_value, one_side
 from .residual_checks import correlation_factor, widen, zero_drift
 from .result import Estimate, SlipFit
 from .selection import information_criteria
@@ -33,6 +33,9 @@ DISAGREE = 0.25
 Z95 = float(stats.norm.ppf(0.975))
 #: standard error of ln W_ad or ln μh above which the covariance says nothing (a factor e^1.5·1.96 ≈ 20)
 MAX_LOG_SE = 1.5
+#: a fit without pull-off in the data bounds W_ad from above only if its delamination spans at least this
+#: many unloading rows: an onset in the last few rows fits the noise of those rows alone (see _tail_onset)
+MIN_ONSET_ROWS = 5
 
 
 def _estimates(raw: RawFit, profiles: dict) -> dict[str, Estimate]:
@@ -181,10 +184,38 @@ def _split_hull(raw: RawFit, est: dict) -> dict:
     return out
 
 
-def _profile(residual, best, name: str, sigma_given: bool):
+def _tail_onset(raw: RawFit) -> bool:
+    """True when the optimum has no pull-off in the data and its delamination covers fewer than
+    :data:`MIN_ONSET_ROWS` unloading rows: the data end in (or just after) contact pinning.
+
+    Then every W_ad above the largest G reached gives the same pinning-only curve (a flat profile), and
+    a W_ad just below it moves only the last rows, by an amount the fit chooses: a change point at the
+    end of the data, which fits the noise of those rows (one +3σ last row gave Δχ² = 8 against the
+    plateau and a tight interval excluding the truth).  The χ²(1)/F limit does not hold for such a
+    change point, and a test that simply ends is not evidence of delamination: W_ad's upper side is open.
+    """
+    m, si = raw.model, raw.par.si(raw.best.params)
+    w, mu, off = si["work_of_adhesion"], si["mu_h"], si["x_offset"]
+    try:
+        if m.split(w, mu, off) is not None:
+            return False
+        pcs = m.pieces(w, mu, off)
+    except ModelDomainError:
+        return False
+    xd = m.dimensionless_x(mu, off)[m.segments.i_turn + 1:]
+    if not xd.size:
+        return True
+    return int(np.count_nonzero(np.minimum.accumulate(xd) < pcs.x_onset)) < MIN_ONSET_ROWS
+
+
+def _profile(residual, best, name: str, sigma_given: bool, upper_open: bool = False):
     """(lower, upper) profile limits; when one side is open, the other is the one-sided 95 % bound
     (the two-sided 90 % limit).  The upper side goes first: it is the one a test stopped before
-    delamination leaves open for W_ad, so the lower side is then computed once, at the right level."""
+    delamination leaves open for W_ad, so the lower side is then computed once, at the right level.
+    ``upper_open``: the upper side is open without probing it (:func:`_tail_onset`)."""
+    if upper_open:
+        return (one_side(residual, best, name, -1.0, sigma_given=sigma_given, level=0.90),
+                ProfileLimit(None, 0, False, False, 0, open=True))
     hi = one_side(residual, best, name, +1.0, sigma_given=sigma_given, level=0.95)
     lo = one_side(residual, best, name, -1.0, sigma_given=sigma_given, level=0.90 if hi.open else 0.95)
     if lo.open and not hi.open:
@@ -200,8 +231,10 @@ def summarize(raw: RawFit, *, profile: bool = True) -> SlipFit:
     residual = residual_function(m, par, raw.scale, sigma)
     profiles = {}
     if profile:  # without a covariance the profile still works, from a 10 % first step
+        tail = _tail_onset(raw)
         for name in ("work_of_adhesion", "mu_h"):
-            profiles[name] = _profile(residual, best, INTERNAL[name], raw.sigma_given)
+            profiles[name] = _profile(residual, best, INTERNAL[name], raw.sigma_given,
+                                      upper_open=tail and name == "work_of_adhesion")
     est = _split_hull(raw, _estimates(raw, profiles))
     si = par.si(best.params)
     try:
