@@ -58,7 +58,26 @@ def _check_options(method, slip, sigma, points, membrane="auto"):
         raise InputError("points", points, "an integer in [40, 5000]")
 
 
-def _hull(name: str, ests: list[Estimate], chosen: Estimate) -> Estimate:
+def _membrane_verdict(large: dict, exact: dict, info: dict) -> tuple[dict, dict, bool]:
+    """Under ``auto``, after the exact refit: keep it when the data prefer it (ΔBIC above
+    :data:`~.membrane_fit.MEMBRANE_DBIC`), go back to the large-stretch fit when they prefer that, and
+    otherwise keep the exact fit's values with intervals that also cover the large-stretch fit's."""
+    from .membrane_fit import MEMBRANE_DBIC, membrane_evidence  # noqa: PLC0415
+    dbic = membrane_evidence(large, exact)
+    why = info["why"].rstrip(".")
+    if dbic > MEMBRANE_DBIC:
+        return exact, {**info, "why": f"{why}; the data prefer the exact membrane (ΔBIC = {dbic:.3g}).",
+                       "delta_bic": dbic}, False
+    if dbic < -MEMBRANE_DBIC:
+        return large, {"membrane": "large-stretch", "delta_bic": dbic,
+                       "why": f"{why}; but the data prefer the large-stretch model (ΔBIC = {-dbic:.3g})."}, False
+    return exact, {**info, "delta_bic": dbic,
+                   "why": f"{why}; the data cannot tell the two membrane models apart (|ΔBIC| = {abs(dbic):.2g} < "
+                          f"{MEMBRANE_DBIC:g}): the values are the exact membrane's, the 95 % intervals cover both "
+                          f"models' intervals."}, True
+
+
+def _hull(name: str, ests: list[Estimate], chosen: Estimate, over: str = "both slip conditions") -> Estimate:
     """One estimate covering both slip conditions' (undecided slip): the widest status and interval."""
     los = [e.ci95[0] if e.ci95 is not None else None for e in ests]
     his = [e.ci95[1] if e.ci95 is not None else None for e in ests]
@@ -71,7 +90,7 @@ def _hull(name: str, ests: list[Estimate], chosen: Estimate) -> Estimate:
     ses = [e.stderr for e in ests if e.stderr is not None]
     return dataclasses.replace(chosen, ci95=None if status == "undetermined" else (lo, hi), status=status,
                                stderr=max(ses) if ses else None,
-                               ci_method=f"{chosen.ci_method} (hull over both slip conditions)")
+                               ci_method=f"{chosen.ci_method} (hull over {over})")
 
 
 def _reported(fits: dict[str, SlipFit], verdict: dict) -> dict[str, Estimate]:
@@ -202,7 +221,11 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
         raws[s] = fit_slip(model, sigma=sigma, fit_x_offset=fit_x_offset, fit_force_offset=fit_force_offset,
                            extra_starts=extra)
     from .membrane_fit import choose_and_refit, wants_profile  # noqa: PLC0415
+    large = raws
     raws, model_info, effects = choose_and_refit(raws, scene, membrane)
+    hull_large = False
+    if membrane == "auto" and model_info["membrane"] == "exact":  # do the data prefer it?
+        raws, model_info, hull_large = _membrane_verdict(large, raws, model_info)
     # profiles cost ~2/3 of a fit: compute them only for the fit whose estimates are reported
     fits = {s: summarize(r, profile=False) for s, r in raws.items()}
     verdict = _decide(fits)
@@ -222,6 +245,10 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
                "fit_force_offset": fit_force_offset, "points": points, "profile": profile, "membrane": membrane}
     reported = _reported(fits, verdict)
+    if hull_large:  # the data cannot tell the membrane models apart: cover the large-stretch fit's too
+        other = summarize(large[verdict["parameters_from"]], profile=profile)
+        reported = {n: _hull(n, [e, other.parameters[n]], e, over="both membrane models") if n in _MAIN else e
+                    for n, e in reported.items()}
     warnings, diagnostics = _warnings(scene, fits, verdict, curve, reported, model_info, effects)
     return FitResult(
         method=method, slip=verdict, parameters=reported, fits=fits,

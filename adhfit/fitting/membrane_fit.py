@@ -147,3 +147,19 @@ def wants_profile(raw: RawFit, model: dict) -> bool:
                 or raw.model.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"]))
     except ModelDomainError:
         return True
+
+
+#: |ΔBIC| between the two membrane models below which the data cannot tell them apart (the slip
+#: verdict's "strong evidence" threshold): the intervals then cover both models' intervals
+MEMBRANE_DBIC = 6.0
+
+
+def membrane_evidence(large: dict[str, RawFit], exact: dict[str, RawFit]) -> float:
+    """ΔBIC = BIC(large-stretch) − BIC(exact) of each model's best slip condition (positive: the data
+    prefer the exact membrane).  Both models have the same parameters, so ΔBIC is the χ² difference in
+    units of the noise variance (given, or estimated from the better fit)."""
+    best_ls = min(large.values(), key=lambda r: r.best.chisqr)
+    best_ex = min(exact.values(), key=lambda r: r.best.chisqr)
+    better = min(best_ls, best_ex, key=lambda r: r.best.chisqr)
+    s2 = 1.0 if better.sigma_given else better.best.chisqr / max(better.best.nfree, 1)
+    return float((best_ls.best.chisqr - best_ex.best.chisqr) / s2) if s2 > 0 else 0.0
