@@ -1,4 +1,4 @@
-"""Measured force curves (DESIGN.md A4, A4b) -> a read-only :class:`Curve` in SI units.
+"""Measured force curves (docs/contracts.md A4, A4b) -> a read-only :class:`Curve` in SI units.
 
 Clean files have ``name [unit]`` headers (any unit pint understands).  Files as instruments write
 them are read too, without flags wherever they are unambiguous (:mod:`adhfit.readers`): metadata
@@ -166,7 +166,7 @@ class Curve:
 def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | None = None,
                units: Mapping[str, str] | None = None, force_sign: str | None = None,
                displacement_sign: str | None = None) -> Curve:
-    """Read a measured curve (DESIGN.md A4, A4b).
+    """Read a measured curve (docs/contracts.md A4, A4b).
 
     Parameters
     ----------

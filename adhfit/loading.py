@@ -6,7 +6,7 @@ detachment). Rows are placed per stage, clustered at the stage boundaries; the o
 negative force and the turning point of the control variable are solved for (root of the exact
 derivative along the branch), not picked from rows, and inserted as rows.
 
-Everything here is dimensionless (DESIGN.md A1); no pandas.
+Everything here is dimensionless (docs/contracts.md A1); no pandas.
 """
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ class History:
         ``stage`` (str array) and ``a, alpha, p, d, delta, f, G`` (float; ``delta`` NaN where
         |p| > 1) and ``stable`` (bool), in history order.
     summary : dict
-        ``f_max``, ``onset``, ``f_min``, ``turning_point`` (DESIGN.md A2 ``--json``).
+        ``f_max``, ``onset``, ``f_min``, ``turning_point`` (docs/contracts.md A2 ``--json``).
     inputs : dict
         The validated inputs, with the resolved ``a_max``.
     """
@@ -148,7 +148,7 @@ def _split(points):
 def history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
             rs: float, a_max: float | None = None, delta_max: float | None = None,
             p_max: float | None = None, lambda0: float = 2.0, points: int = 200) -> History:
-    """Compute a full dimensionless history (DESIGN.md A2).
+    """Compute a full dimensionless history (docs/contracts.md A2).
 
     Parameters
     ----------

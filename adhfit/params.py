@@ -86,7 +86,7 @@ def _p(name, symbol, unit, default, lower, upper, description, lower_open=True, 
     return Param(name, symbol, unit, default, lower, upper, lower_open, upper_open, description)
 
 
-#: Dimensionless groups (DESIGN.md A1).  Cross-parameter constraints are in ``check_scene``.
+#: Dimensionless groups (docs/contracts.md A1).  Cross-parameter constraints are in ``check_scene``.
 DIMENSIONLESS: dict[str, Param] = {
     "p": _p("p", "Pb/2μh", "1", None, -1.0, 1.0,
             "pressure P b/(2 mu h) = b/R (fixed under displacement control)"),

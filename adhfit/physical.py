@@ -42,7 +42,7 @@ class SceneResult:
     scales : Scales
         Length, force, pressure and energy scales used.
     result : SimulationResult
-        The dimensionless history (``result.frame`` has the DESIGN.md A2 columns).
+        The dimensionless history (``result.frame`` has the docs/contracts.md A2 columns).
     """
 
     scene: Scene
@@ -51,7 +51,7 @@ class SceneResult:
 
     @property
     def frame(self) -> pd.DataFrame:
-        """The dimensionless history (DESIGN.md A2 columns)."""
+        """The dimensionless history (docs/contracts.md A2 columns)."""
         return self.result.frame
 
     @property

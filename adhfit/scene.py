@@ -1,4 +1,4 @@
-"""A frozen description of one test in SI units, and the TOML scene file of DESIGN.md A3.
+"""A frozen description of one test in SI units, and the TOML scene file of docs/contracts.md A3.
 
 A :class:`Scene` holds geometry, material (μh), interface (slip, W_ad) and loading (control mode,
 fixed pressure or gap, optional loading end); μh and W_ad may be left to the fit.
@@ -24,9 +24,9 @@ __all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMB
 
 CONTROLS = ("displacement", "pressure")
 SLIPS = ("auto", "no-slip", "frictionless")
-MEMBRANE_MODELS = ("auto", "large-stretch", "exact")  # of a fit (DESIGN.md A6)
+MEMBRANE_MODELS = ("auto", "large-stretch", "exact")  # of a fit (docs/contracts.md A6)
 
-#: TOML layout (DESIGN.md A3): section -> key -> (Scene field, dimension or None for a word).
+#: TOML layout (docs/contracts.md A3): section -> key -> (Scene field, dimension or None for a word).
 LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {
     "membrane": {"radius": ("membrane_radius", "length"), "prestretch": ("prestretch", "dimensionless"),
                  "mu_h": ("mu_h", "force_per_length"), "model": ("membrane_model", None)},
@@ -41,20 +41,20 @@ FILE_KEY = {fld: f"[{sec}] {key}" for sec, keys in LAYOUT.items() for key, (fld,
 _DIMENSION = {fld: dim for keys in LAYOUT.values() for fld, dim in keys.values()}
 
 #: Large-stretch approximation (eq. 10) vs the exact neo-Hookean membrane: (λ0, relative error of the
-#: free-inflation apex deflection at p = 0.6), DESIGN.md C.
+#: free-inflation apex deflection at p = 0.6), docs/numerics.md C.
 LARGE_STRETCH_ERROR = ((1.1, -0.33), (1.3, -0.15), (1.5, -0.067), (2.0, -0.012), (3.0, -0.001))
 
 _FIXED = {"displacement": ("pressure", "gap", "the fixed pressure, e.g. '1.2 kPa'"),
           "pressure": ("gap", "pressure", "the fixed gap from clamped edge to substrate apex, e.g. '0.2 mm'")}
 _ENDS = ("contact_radius_max", "displacement_max", "pressure_max")
-#: Scene field -> its dimensionless group (DESIGN.md A1), in the order simulate() lists them.
+#: Scene field -> its dimensionless group (docs/contracts.md A1), in the order simulate() lists them.
 _GROUP_OF = {"pressure": "p", "gap": "d", "work_of_adhesion": "w", "substrate_radius": "rs",
              "contact_radius_max": "a_max", "displacement_max": "delta_max", "pressure_max": "p_max"}
 
 
 @dataclass(frozen=True, kw_only=True)
 class Scene:
-    """One membrane adhesion test, in SI units (DESIGN.md A3).
+    """One membrane adhesion test, in SI units (docs/contracts.md A3).
 
     Parameters
     ----------
@@ -185,7 +185,7 @@ class Scene:
 
     def to_dimensionless(self, mu_h: float | str | None = None, work_of_adhesion: float | str | None = None,
                          *, slip: str | None = None) -> dict[str, Any]:
-        """Keyword arguments of :func:`adhfit.simulate` for this scene (DESIGN.md A2b).
+        """Keyword arguments of :func:`adhfit.simulate` for this scene (docs/contracts.md A2b).
 
         Parameters
         ----------
@@ -300,7 +300,7 @@ def normalize_priors(priors: Mapping[str, Any], *, prefix: str = "priors") -> di
 # ----------------------------------------------------------------------------------------------
 # TOML
 def load_scene(path: str | Path) -> Scene:
-    """Read a scene file (TOML, DESIGN.md A3).
+    """Read a scene file (TOML, docs/contracts.md A3).
 
     Parameters
     ----------

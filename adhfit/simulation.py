@@ -66,7 +66,7 @@ def simulate(control: str, slip: str, *, p: float | None = None, d: float | None
     points : int, default 200
         Approximate number of rows, spread over the three stages.
     membrane : {"large-stretch", "exact"}, default "large-stretch"
-        The paper's closed forms, or the exact neo-Hookean membrane (DESIGN.md A6; lambda0 matters).
+        The paper's closed forms, or the exact neo-Hookean membrane (docs/contracts.md A6; lambda0 matters).
 
     Returns
     -------

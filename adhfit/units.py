@@ -2,7 +2,7 @@
 
 Physical inputs (scene files, CSV headers, keyword overrides) are parsed here with one pint
 registry and reduced to plain SI floats; :class:`Scales` then maps SI values to the dimensionless
-groups of DESIGN.md A1 (paper section 5) and back.  Nothing else in adhfit converts units.
+groups of docs/contracts.md A1 (paper section 5) and back.  Nothing else in adhfit converts units.
 """
 from __future__ import annotations
 
@@ -168,7 +168,7 @@ def unit_factor(unit: str, dimension: str, *, name: str, where: str | None = Non
     return factor
 
 
-#: Dimensionless groups of DESIGN.md A1 -> the Scales attribute that makes them dimensional.
+#: Dimensionless groups of docs/contracts.md A1 -> the Scales attribute that makes them dimensional.
 GROUPS: dict[str, str] = {
     "p": "pressure", "p_max": "pressure",
     "d": "length", "delta": "length", "delta_max": "length", "a": "length", "a_max": "length",
@@ -185,7 +185,7 @@ def _scale(x: Any, factor: float) -> Any:
 
 @dataclass(frozen=True)
 class Scales:
-    """Scales of the dimensionless groups (DESIGN.md A1, paper section 5).
+    """Scales of the dimensionless groups (docs/contracts.md A1, paper section 5).
 
     Parameters
     ----------

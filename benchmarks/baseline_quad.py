@@ -1,11 +1,11 @@
 """Plain scipy baseline of the forward model: adaptive ``quad`` for every integral, ``brentq`` for roots.
 
 This is the model as a competent engineer would code it straight from the paper (Yang, Srivastava &
-Long, sections 2-3), point by point, *without* the closed-form elliptic integrals of DESIGN.md B2.
+Long, sections 2-3), point by point, *without* the closed-form elliptic integrals of docs/numerics.md B2.
 It is the yardstick for ``benchmarks/bench_time.py`` and ``benchmarks/bench_accuracy.py`` and is never
 imported by the ``adhfit`` package.
 
-Everything is dimensionless (DESIGN.md A1, B1): lengths over b, ``kappa = p = P b / (2 mu h)``,
+Everything is dimensionless (docs/contracts.md A1, B1): lengths over b, ``kappa = p = P b / (2 mu h)``,
 ``D = kappa C1``, ``C2 = C2bar / b**2``.  The non-contacting membrane (a <= r <= 1) obeys
 
     sin(theta) = (kappa r^2 + D) / sqrt(r^2 + C2)                                   (eq. 38)
@@ -15,7 +15,7 @@ Everything is dimensionless (DESIGN.md A1, B1): lengths over b, ``kappa = p = P 
     f          = -pi D                                                          (eqs. 26, 50, 59)
 
 ``J0`` is the lambda0-free material coordinate ``L = ln(beta/rho)`` of the contact edge, so no
-observable depends on lambda0 (DESIGN.md C).  Q is a concave quadratic in ``u = r^2``, so it is positive
+observable depends on lambda0 (docs/numerics.md C).  Q is a concave quadratic in ``u = r^2``, so it is positive
 on the whole interval iff it is positive at both ends; that is the admissibility test used here.
 
 Only the no-slip branch theta_a > pi/2 (eq. 42, reached under pressure control at p well below -1)
@@ -599,7 +599,7 @@ def state(control: str, slip: str, stage: str, *, p: float | None = None, d: flo
         ``"making_contact"`` or ``"delamination"`` (locator ``a``) or ``"pinning"`` (locator ``alpha``,
         radians).
     p, d, w, rs, a_max : float
-        Dimensionless scene (DESIGN.md A1); p under displacement control, d under pressure control.
+        Dimensionless scene (docs/contracts.md A1); p under displacement control, d under pressure control.
     quad_tol, root_tol : float
         quad ``epsabs = epsrel`` and brentq ``xtol`` (``rtol`` floored at 4 eps).
 

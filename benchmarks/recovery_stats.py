@@ -1,6 +1,6 @@
 """What one fit says about the truth, and the per-cell summary of the recovery study (``recovery.py``).
 
-Works on the report dictionary (``FitResult.as_dict()``, DESIGN.md A5/A5b), old and new shapes: a
+Works on the report dictionary (``FitResult.as_dict()``, docs/contracts.md A5/A5b), old and new shapes: a
 parameter without ``status`` is ``determined`` when its ``ci95`` is two-sided; ``ci95`` may be
 ``[low, None]`` (``lower_bound``) or ``[None, high]`` (``upper_bound``).
 

@@ -1,5 +1,5 @@
 """A batch run by local worker processes or by a Dask cluster gives the summary a serial run gives
-(DESIGN.md A7); a failing curve, or a worker process that dies, stops no other curve."""
+(docs/contracts.md A7); a failing curve, or a worker process that dies, stops no other curve."""
 from __future__ import annotations
 
 import csv

@@ -1,4 +1,4 @@
-"""``adhfit simulate`` on the command line (DESIGN.md A2): files, JSON, errors, scene input."""
+"""``adhfit simulate`` on the command line (docs/contracts.md A2): files, JSON, errors, scene input."""
 from __future__ import annotations
 
 import csv
@@ -194,7 +194,7 @@ def test_invalid_input_exit_2_one_line(case, capsys, tmp_path):
 
 
 # ---------------------------------------------------------------------------------------------
-# scene input (DESIGN.md A3) and the installed entry point
+# scene input (docs/contracts.md A3) and the installed entry point
 # ---------------------------------------------------------------------------------------------
 SCENE = """\
 [membrane]

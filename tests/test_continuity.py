@@ -86,7 +86,7 @@ def test_no_slip_pinning_reaches_theta_a_beyond_half_pi():
     pin = r.frame[r.frame.stage == "pinning"]
     theta_a = pin.alpha - np.arcsin(pin.a / PI2["rs"])
     assert (theta_a > math.pi / 2 + 0.05).sum() >= 3 and (theta_a < math.pi / 2).sum() >= 10
-    assert (pin.p < -1).any()           # strongly negative pressure (DESIGN.md C)
+    assert (pin.p < -1).any()           # strongly negative pressure (docs/numerics.md C)
     # delta is undefined there (|p| > 1) and left NaN, and only there
     assert pin.delta.isna().equals(pin.p.abs() > 1)
 

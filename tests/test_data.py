@@ -1,4 +1,4 @@
-"""Tests of adhfit.data: measured curves from CSV (DESIGN.md A4)."""
+"""Tests of adhfit.data: measured curves from CSV (docs/contracts.md A4)."""
 from __future__ import annotations
 
 import hashlib

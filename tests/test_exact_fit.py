@@ -1,4 +1,4 @@
-"""Fits with the exact neo-Hookean membrane (issue 11 item 3; DESIGN.md A3, A5b ``model``, A6).
+"""Fits with the exact neo-Hookean membrane (issue 11 item 3; docs/contracts.md A3, A5b ``model``, A6).
 
 The curves are made with ``adhfit.exact.exact_history`` (tests/exact_curves.py), not with the fit's
 own model code; the truth is W_ad = 0.4 J/m^2, μh = 2 N/m.  Tolerances: the issue's "within 2 %"

@@ -43,7 +43,7 @@ def test_free_inflation_from_a_guess_against_reference(guess):
 
 
 def test_free_inflation_design_numbers():
-    # DESIGN.md B5: (approximation - exact)/exact of the apex deflection at p = 0.6
+    # docs/numerics.md B5: (approximation - exact)/exact of the apex deflection at p = 0.6
     expected = {1.1: -0.33, 1.3: -0.15, 1.5: -0.067, 2.0: -0.012, 3.0: -0.001}
     for lam0, err in expected.items():
         exact = free_inflation(0.6, lam0).d

@@ -1,4 +1,4 @@
-"""``adhfit fit`` end to end (DESIGN.md A5) and its handling of malformed input (exit 2, one line)."""
+"""``adhfit fit`` end to end (docs/contracts.md A5) and its handling of malformed input (exit 2, one line)."""
 from __future__ import annotations
 
 import json

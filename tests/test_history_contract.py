@@ -1,4 +1,4 @@
-"""The history contract of ``adhfit.simulate`` (DESIGN.md A2, A2b) over every control x slip x
+"""The history contract of ``adhfit.simulate`` (docs/contracts.md A2, A2b) over every control x slip x
 substrate, and starts at p <= 0 and d < 0 (issue 2)."""
 from __future__ import annotations
 
@@ -158,7 +158,7 @@ def test_extrema_are_rows_and_extreme(run):
 
 
 def test_extrema_are_located_not_picked(run):
-    """The extremum is solved between rows (DESIGN.md A2, 'to 1e-8'): its neighbours on both sides in
+    """The extremum is solved between rows (docs/contracts.md A2, 'to 1e-8'): its neighbours on both sides in
     the same stage are no more extreme."""
     control, slip, kw, r = run
     fr, s = r.frame, r.summary

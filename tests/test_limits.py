@@ -1,7 +1,7 @@
 """Analytical limits and hand-derived identities of the forward model (issue 2).
 
 Every expected value here comes from the paper's equations worked by hand, never from an earlier run
-of the engine. Notation as DESIGN.md A1: lengths over b, kappa = p = b/R, c = 1/rs.
+of the engine. Notation as docs/contracts.md A1: lengths over b, kappa = p = b/R, c = 1/rs.
 
 Small-contact expansion used below (derived from eqs. 15, 20, 25 with C2 = 0): with
 sin(theta) = kappa r + D/r, D = -(kappa + c) a^2, linearising tan(theta) in D (the neglected terms are
@@ -57,7 +57,7 @@ def test_apex_deflection_is_eq15_for_positive_pressure(p):
 
 @pytest.mark.parametrize("p", [0.0, 0.2, 0.6, 0.95, 1.0])
 def test_apex_deflection_odd_and_finite_at_zero(p):
-    # P < 0 inflates the membrane downward: the Case I cap is the mirror image (DESIGN.md C)
+    # P < 0 inflates the membrane downward: the Case I cap is the mirror image (docs/numerics.md C)
     assert float(apex_deflection(-p)) == -float(apex_deflection(p))
     assert float(apex_deflection(0.0)) == 0.0
     assert abs(float(apex_deflection(p))) <= 1.0
@@ -262,7 +262,7 @@ def test_making_contact_force_eq26(control, kw, slip):
 
 
 def test_pull_off_frictionless_slightly_smaller_than_no_slip_at_paper_base_case():
-    # the paper's remark (section 5.1), true at its base case only; not a law (DESIGN.md C)
+    # the paper's remark (section 5.1), true at its base case only; not a law (docs/numerics.md C)
     ns = adhfit.simulate("displacement", "no-slip", **BASE_DC).summary["f_min"]["f"]
     fr = adhfit.simulate("displacement", "frictionless", **BASE_DC).summary["f_min"]["f"]
     assert ns < fr < 0

@@ -11,7 +11,7 @@ from adhfit.core.profile import profile
 from adhfit.physical import simulate_scene
 from adhfit.scene import Scene
 
-# the paper's FEA set (section 4, DESIGN.md C): b = 2 mm, mu h = 2 N/m -> force scale 8 mN,
+# the paper's FEA set (section 4, docs/numerics.md C): b = 2 mm, mu h = 2 N/m -> force scale 8 mN,
 # pressure scale 2 kPa; P = 1.2 kPa -> p = 0.6; R_s = 1 mm -> rs = 0.5; W = 0.4 J/m^2 -> w = 0.2
 FEA = dict(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement",
            pressure="1.2 kPa", mu_h="2 N/m", work_of_adhesion="0.4 J/m^2", slip="no-slip",
@@ -31,7 +31,7 @@ def test_si_frame_is_the_dimensionless_one_scaled_by_hand():
 
 
 def test_b_not_one_changes_nothing_dimensionless():
-    """DESIGN.md C: test in SI with b != 1 so a stray factor b would show."""
+    """docs/numerics.md C: test in SI with b != 1 so a stray factor b would show."""
     base = simulate_scene(Scene(**FEA))
     big = simulate_scene(Scene(**{**FEA, "membrane_radius": "4 mm", "substrate_radius": "2 mm",
                                   "pressure": "0.6 kPa", "contact_radius_max": "1 mm"}))

@@ -82,7 +82,7 @@ def _check(kw):
     assert fr.G.min() >= -1e-12 * w and fr.G.max() <= w * (1 + 1e-12)
     assert (fr.G[fr.stage == "making_contact"] == 0).all()
     np.testing.assert_allclose(fr.G[fr.stage == "delamination"], w, rtol=1e-9)
-    # geometry: a in [0, a_max] without slip (frictionless pinning may grow a: DESIGN.md C, but the
+    # geometry: a in [0, a_max] without slip (frictionless pinning may grow a: docs/numerics.md C, but the
     # contact stays inside the clamp and on the substrate's upper hemisphere), angle in [0, pi]
     a_max = r.inputs["a_max"]
     a_cap = a_max * (1 + 1e-12) if kw["slip"] == "no-slip" else min(1.0, kw["rs"])

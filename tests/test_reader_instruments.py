@@ -1,4 +1,4 @@
-"""Instrument exports (DESIGN.md A4b): one curve written in six layouts reads as the clean CSV.
+"""Instrument exports (docs/contracts.md A4b): one curve written in six layouts reads as the clean CSV.
 
 The files in tests/data/instruments/ were written by make_instruments.py from clean.csv by moving
 the decimal point on decimal strings (no arithmetic), so every layout must give the clean file's SI

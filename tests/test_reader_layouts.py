@@ -1,5 +1,5 @@
 """Layout variants around the six instrument files: two-column European files, clock-time columns,
-unnamed LabVIEW channels, several X columns, and instrument name prefixes (DESIGN.md A4b).
+unnamed LabVIEW channels, several X columns, and instrument name prefixes (docs/contracts.md A4b).
 
 Expected arrays are the clean reference file's (tests/data/instruments/clean.csv).
 """

@@ -1,5 +1,5 @@
 """What stays ambiguous in a curve file is one line naming the choices and the flag; the overrides
-(``columns``, ``units``, ``force_sign``, ``displacement_sign``) settle it (DESIGN.md A4b).
+(``columns``, ``units``, ``force_sign``, ``displacement_sign``) settle it (docs/contracts.md A4b).
 
 Files are built here from the clean instrument reference (tests/data/instruments/clean.csv), so the
 expected SI arrays are the clean file's, read through the original ``name [unit]`` path.

@@ -2,8 +2,8 @@
 
 Why these tolerances: the reference is good to ~1e-25 (its quadrature agrees with plain 70-digit
 quadrature to ~1e-30), so every difference is the engine's. The engine works in double precision
-with closed forms (DESIGN.md B2, ~1e-15 on the integrals) and root solves, so states should agree
-to 1e-9 with a wide margin; summaries carry the extra error of locating an extremum (DESIGN.md A2:
+with closed forms (docs/numerics.md B2, ~1e-15 on the integrals) and root solves, so states should agree
+to 1e-9 with a wide margin; summaries carry the extra error of locating an extremum (docs/contracts.md A2:
 "to 1e-8").
 
 - ``tests/data/reference_states.json`` (made by ``python -m tests.reference.make_reference``) holds

@@ -46,7 +46,7 @@ def _est(value, lo, hi, unit, **kw):
 
 
 def _trust_report() -> dict:
-    """A report with the keys a fit with per-parameter status has (DESIGN contract A5b)."""
+    """A report with the keys a fit with per-parameter status has (docs/contracts.md A5b)."""
     return {
         "method": "lsq",
         "slip": {"selected": "no-slip", "verdict": "no-slip selected", "delta_aic": 12.0, "delta_bic": 12.0,

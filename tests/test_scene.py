@@ -1,4 +1,4 @@
-"""Tests of adhfit.scene: the Scene value object, the TOML scene file (DESIGN.md A3), priors."""
+"""Tests of adhfit.scene: the Scene value object, the TOML scene file (docs/contracts.md A3), priors."""
 from __future__ import annotations
 
 import dataclasses
@@ -59,7 +59,7 @@ def edit(text: str, old: str, new: str) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
-# reading the A3 example; the FEA case of DESIGN.md C
+# reading the A3 example; the FEA case of docs/numerics.md C
 def test_load_a3_example_in_si(write):
     path = write(A3)
     s = load_scene(path)
@@ -307,7 +307,7 @@ def test_pressure_max_checked_against_table():
 
 
 def test_to_dimensionless_feeds_simulate(write):
-    """Contract check against adhfit.simulate (DESIGN.md A2b): the keywords are accepted as given."""
+    """Contract check against adhfit.simulate (docs/contracts.md A2b): the keywords are accepted as given."""
     import adhfit
     simulate = getattr(adhfit, "simulate", None)
     if simulate is None:

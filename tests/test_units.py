@@ -1,4 +1,4 @@
-"""Tests of adhfit.units: parsing physical values and the dimensionless scales (DESIGN.md A1)."""
+"""Tests of adhfit.units: parsing physical values and the dimensionless scales (docs/contracts.md A1)."""
 from __future__ import annotations
 
 import math
@@ -129,7 +129,7 @@ def test_unit_factor_not_understood(unit):
 # ---------------------------------------------------------------------------------------------
 # Scales
 def test_fea_case_scales():
-    """Paper section 4 / DESIGN.md C: b = 2 mm, mu h = 2 N/m -> 8 mN and 2 kPa, computed by hand."""
+    """Paper section 4 / docs/numerics.md C: b = 2 mm, mu h = 2 N/m -> 8 mN and 2 kPa, computed by hand."""
     mu, h, beta, lam0 = 2e6, 1e-6, 1e-3, 2.0
     s = Scales(b=lam0 * beta, mu_h=mu * h)
     assert s.length == pytest.approx(2e-3)
@@ -145,7 +145,7 @@ def test_fea_case_scales():
 
 
 def test_scales_match_pint_independently():
-    """The scales as pint computes them from the formulas of DESIGN.md A1."""
+    """The scales as pint computes them from the formulas of docs/contracts.md A1."""
     b, mu_h = ureg.Quantity(3.7, "mm"), ureg.Quantity(0.85, "N/m")
     s = Scales(b.to("m").magnitude, mu_h.to("N/m").magnitude)
     assert s.force == pytest.approx((2 * mu_h * b).to("N").magnitude, rel=1e-14)

@@ -1,4 +1,4 @@
-"""A whole loading history in one compiled call (DESIGN.md A2, B3): :func:`run`.
+"""A whole loading history in one compiled call (docs/contracts.md A2, B3): :func:`run`.
 
 Making contact (a from 0 to a_max; the end of loading is solved here from delta_max or p_max when
 those are given), contact pinning (from its start, G = 0 or alpha = 0, to the onset of delamination,

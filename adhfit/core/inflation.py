@@ -10,7 +10,7 @@ def apex_deflection(p):
     """Apex deflection d0/b of the freely inflated membrane at pressure p = Pb/(2 mu h), |p| <= 1.
 
     Eq. (15) rewritten without cancellation, d0 = p / (1 + sqrt(1 - p^2)): finite at p = 0 and the
-    correct (Case I) cap for p < 0 (DESIGN.md C). NaN for |p| > 1, where no Case I cap exists.
+    correct (Case I) cap for p < 0 (docs/numerics.md C). NaN for |p| > 1, where no Case I cap exists.
     """
     p = np.asarray(p)
     with np.errstate(invalid="ignore"):

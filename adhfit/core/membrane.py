@@ -1,4 +1,4 @@
-"""The free (non-contacting) membrane between the contact edge and the clamp (DESIGN.md B1, B2).
+"""The free (non-contacting) membrane between the contact edge and the clamp (docs/numerics.md B1, B2).
 
 Each stage only decides the two constants (D, C2) of eq. (38), sin(theta) = (kappa r^2 + D)/sqrt(r^2 + C2);
 these kernels turn them into the material coordinate of the edge (J0 = ln(beta/rho_a)) and the gap d
@@ -19,7 +19,7 @@ __all__ = ["roots", "integrals", "substrate_cos", "free_membrane", "rise", "rise
 
 @jit
 def roots(kappa, D, C2):
-    """q and u_minus of Q(u) = (q - kappa^2 u)(u - u_minus) (stable formulas, DESIGN.md B2)."""
+    """q and u_minus of Q(u) = (q - kappa^2 u)(u - u_minus) (stable formulas, docs/numerics.md B2)."""
     B = 1.0 - 2.0 * kappa * D
     C = C2 - D * D
     sq = np.sqrt(1.0 - 4.0 * kappa * D + 4.0 * kappa * kappa * C2)
@@ -91,7 +91,7 @@ def free_membrane(kappa, D, C2, a, c, cos_ta, need_j1):
 def rise(kappa, D, C2, x, y, y_is_root):
     """J1 from u = y to u = x (x > y >= u_minus): the rise of the free membrane between r = sqrt(y)
     and r = sqrt(x). ``y_is_root``: y is the lower root u_minus itself (the theta_a > pi/2 branch,
-    eq. 47), whose factor is then exactly 0 (DESIGN.md B2: a flag, not a number passed back)."""
+    eq. 47), whose factor is then exactly 0 (docs/numerics.md B2: a flag, not a number passed back)."""
     q, um = roots(kappa, D, C2)
     k2, C = kappa * kappa, C2 - D * D
     ly2 = 0.0 if y_is_root else y - um

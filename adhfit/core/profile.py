@@ -63,7 +63,7 @@ def profile(stage: str, slip: str, *, a: float, alpha: float, p: float, d: float
     stage, slip : str
         The row's stage and the interface condition.
     a, alpha, p, d, f, G : float
-        The row's columns (DESIGN.md A1).
+        The row's columns (docs/contracts.md A1).
     rs : float
         R_s / b (inf for flat).
     n : int

@@ -1,6 +1,6 @@
 """The exact incompressible neo-Hookean membrane (no large-stretch approximation).
 
-``exact_history`` computes a full history with the DESIGN.md A2 columns (what
+``exact_history`` computes a full history with the docs/contracts.md A2 columns (what
 ``adhfit.simulate(..., membrane="exact")`` returns as a frame); ``free_inflation`` the free state.
 Modules: ``kernels`` (compiled ODEs and integrator), ``state`` (one shot), ``solve`` (Newton on the
 shooting unknowns), ``stages`` (the stage problems), ``control`` (inputs), ``history``.

@@ -1,4 +1,4 @@
-"""A full loading history of the exact membrane: making contact, pinning, delamination (DESIGN A2)."""
+"""A full loading history of the exact membrane: making contact, pinning, delamination (docs/contracts.md A2)."""
 from __future__ import annotations
 
 import math
@@ -197,12 +197,12 @@ def _extremum(stage, states, key, sign):
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
                   rs: float, lambda0: float, a_max: float | None = None, delta_max: float | None = None,
                   p_max: float | None = None, points: int = 200, n: int = DEFAULT_N) -> ExactHistory:
-    """Compute a full history of the exact neo-Hookean membrane (DESIGN.md A2 columns).
+    """Compute a full history of the exact neo-Hookean membrane (docs/contracts.md A2 columns).
 
     Parameters
     ----------
     control, slip, p, d, w, rs, a_max, delta_max, p_max, points
-        As ``adhfit.simulate`` (dimensionless, DESIGN.md A1).
+        As ``adhfit.simulate`` (dimensionless, docs/contracts.md A1).
     lambda0 : float
         Pre-stretch, > 1; every observable depends on it.
     n : int

@@ -38,7 +38,7 @@ class Config:
 
 @dataclass
 class State:
-    """An exact-membrane state and its observables (dimensionless, DESIGN.md A1)."""
+    """An exact-membrane state and its observables (dimensionless, docs/contracts.md A1)."""
 
     lc: float
     rho_a: float

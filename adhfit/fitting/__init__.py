@@ -1,4 +1,4 @@
-"""Fits of measured curves: W_ad, μh and the slip condition (DESIGN.md A5, B4).
+"""Fits of measured curves: W_ad, μh and the slip condition (docs/contracts.md A5, B4).
 
 Public names (imported on first use, so that ``adhfit simulate`` does not load lmfit):
 :func:`fit_curve`, :func:`fit_global` (a test series as one fit), :class:`FitResult`, :class:`CurveModel`, :func:`synthetic_curve`.

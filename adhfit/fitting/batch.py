@@ -165,7 +165,7 @@ def _ci(e: Mapping[str, Any]) -> tuple[Any, Any]:
 
 
 def summary_row(job: Job, report: Mapping[str, Any]) -> dict[str, Any]:
-    """The summary.csv row of a fitted curve, from its report.json dictionary (DESIGN.md A5)."""
+    """The summary.csv row of a fitted curve, from its report.json dictionary (docs/contracts.md A5)."""
     slip = report.get("slip", {}) or {}
     prov = report.get("provenance", {}) or {}
     row: dict[str, Any] = {"file": str(job.data), "status": "ok", "error": ""}

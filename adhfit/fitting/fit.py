@@ -1,10 +1,10 @@
-"""``fit_curve``: fit a measured curve under both slip conditions and compare them (DESIGN.md A5).
+"""``fit_curve``: fit a measured curve under both slip conditions and compare them (docs/contracts.md A5).
 
 One call reads the data and the scene (or takes them as objects), fits each slip condition by least
 squares (:mod:`.lsq`), computes intervals (:mod:`.summary`), compares the conditions
 (:mod:`.selection`) and returns a frozen :class:`~.result.FitResult`.  The second condition is also
 started from the first one's optimum (the two optima are usually close).  The membrane model
-(DESIGN.md A6) is decided after the large-stretch fits, and the exact membrane refines them
+(docs/contracts.md A6) is decided after the large-stretch fits, and the exact membrane refines them
 (:mod:`.membrane_choice`, :mod:`.membrane_fit`).
 """
 from __future__ import annotations
@@ -170,7 +170,7 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     Parameters
     ----------
     data : path or adhfit.data.Curve
-        The measured curve (CSV, DESIGN.md A4) or a Curve.
+        The measured curve (CSV, docs/contracts.md A4) or a Curve.
     scene : path or adhfit.scene.Scene
         The scene (TOML, A3): geometry and the fixed pressure or gap.
     method : {"lsq", "mcmc"}

@@ -1,4 +1,4 @@
-"""``fit_global``: a test series as one fit (issue 13, DESIGN.md A7).
+"""``fit_global``: a test series as one fit (issue 13, docs/contracts.md A7).
 
 One W_ad, one μh and one slip condition for every curve; offsets per curve; each curve its own scene.
 
@@ -17,7 +17,7 @@ Procedure, per slip condition:
 
 Intervals: lmfit's covariance (residuals in units of σ, not rescaled) and, for the reported slip
 condition, the likelihood profile with the χ²(1) critical value; the same ``status`` rules as a single
-fit (DESIGN.md A5b).  Per-curve checks are in :mod:`.series_checks`.
+fit (docs/contracts.md A5b).  Per-curve checks are in :mod:`.series_checks`.
 """
 from __future__ import annotations
 
@@ -311,7 +311,7 @@ def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma
     Parameters
     ----------
     curves : list of path or adhfit.data.Curve
-        Two or more measured curves (CSV, DESIGN.md A4).
+        Two or more measured curves (CSV, docs/contracts.md A4).
     scenes : path, Scene, or a list of them (one per curve)
         Each curve's scene: geometry and its own fixed pressure or gap.
     slip : {"auto", "no-slip", "frictionless"}

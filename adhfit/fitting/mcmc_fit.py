@@ -83,7 +83,7 @@ PRIOR_EDGE = 0.05
 
 def _edge(col: np.ndarray, prior) -> tuple[bool, bool]:
     """(at lower edge, at upper edge): whether the 2.5 / 97.5 percentiles reach the prior's bounds, so
-    that the data bound the parameter from one side only (DESIGN.md A5b)."""
+    that the data bound the parameter from one side only (docs/contracts.md A5b)."""
     if prior is None or prior.dist == "normal":
         return False, False
     f = (np.log if prior.log else (lambda v: v))

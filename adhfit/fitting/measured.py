@@ -74,7 +74,7 @@ def loading_end_si(frame: pd.DataFrame, control: str, scales) -> float:
 
 def parse_end(key: str, value: float | str, scales) -> float:
     """A loading end (``a_max``, ``delta_max`` or ``p_max``) as its dimensionless group: a bare number
-    is already dimensionless (DESIGN A1 groups), a string with a unit ("0.6 mm", "1.6 kPa") is converted."""
+    is already dimensionless (docs/contracts.md A1 groups), a string with a unit ("0.6 mm", "1.6 kPa") is converted."""
     if not isinstance(value, str):
         return float(value)
     si = parse_quantity(value, _END_DIM[key], name=f"--{key.replace('_', '-')}")

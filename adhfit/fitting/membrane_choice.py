@@ -1,4 +1,4 @@
-"""Which membrane model a fit needs (DESIGN.md A6 ``auto``), and what the approximation costs.
+"""Which membrane model a fit needs (docs/contracts.md A6 ``auto``), and what the approximation costs.
 
 After a least-squares fit with the large-stretch membrane (fast), the exact neo-Hookean membrane is
 computed once at the fitted values, on the measured rows:

@@ -134,7 +134,7 @@ def wants_profile(raw: RawFit, model: dict) -> bool:
     """Whether the reported fit needs likelihood profiles: always with the large-stretch membrane
     (cheap); with the exact one when the covariance is missing or wide (standard error of ln W_ad or
     ln μh above :data:`MAX_COVARIANCE_SE`), when the data end before pull-off (W_ad is then bounded from
-    one side) or when the optimum sits on the kink at the turning point (DESIGN.md B4)."""
+    one side) or when the optimum sits on the kink at the turning point (docs/numerics.md B4)."""
     if model["membrane"] != "exact" or raw.best.covar is None:
         return True
     for name in ("ln_work_of_adhesion", "ln_mu_h"):  # a wide or missing covariance interval is not trusted

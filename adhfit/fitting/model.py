@@ -1,4 +1,4 @@
-"""The model of a measured curve: the predicted force at every measured row (DESIGN.md B4).
+"""The model of a measured curve: the predicted force at every measured row (docs/numerics.md B4).
 
 A measured curve is a history: loading (the control variable rises to its largest value, row
 ``Curve.i_turn``), then unloading, possibly past pull-off.  The model follows the same history:
@@ -12,7 +12,7 @@ A measured curve is a history: loading (the control variable rises to its larges
   spacing wide so that χ² stays continuous (:meth:`CurveModel.attached_weight`).  Where pull-off
   happened is then weighed by the likelihood, not found by a threshold on the data: at 4 % force
   noise the jump is only 3–4 row-to-row noise steps high and a 6-σ detector missed it in 14 of 15
-  curves, which biased W_ad by -30 % (DESIGN.md B4).
+  curves, which biased W_ad by -30 % (docs/numerics.md B4).
 * With a **fixed split** (``fixed_split=True``: the rows of ``segments``) the rows before the jump are
   attached; one beyond the model's turning point is given the turning-point force (a clamp that keeps
   the residual continuous), and the measured pull-off position enters as one more residual
@@ -49,7 +49,7 @@ from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
            "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS"]
 
-#: dimensionless control variable of each control mode (DESIGN.md A1)
+#: dimensionless control variable of each control mode (docs/contracts.md A1)
 CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
 #: name of the control-variable offset (a row of adhfit.params.FITTED) per control mode
 OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offset"}
@@ -335,7 +335,7 @@ class CurveModel:
                            fraction: float = 0.1) -> bool:
         """True when the optimum sits on the kink: an attached row lies beyond the model's turning point
         (clamped) or closer to it than ``fraction`` of the local row spacing.  The force's slope is
-        infinite there, so the Jacobian (and the covariance) is fragile (DESIGN.md B4)."""
+        infinite there, so the Jacobian (and the covariance) is fragile (docs/numerics.md B4)."""
         pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
         xd = self.dimensionless_x(mu_h, x_offset)[self._attached]
         xd = xd[self.attached_weight(mu_h, x_offset, pcs) >= 0.5]

@@ -1,4 +1,4 @@
-"""Likelihood-profile intervals: the check of the covariance intervals that DESIGN.md B4 asks for.
+"""Likelihood-profile intervals: the check of the covariance intervals that docs/numerics.md B4 asks for.
 
 For a parameter θ (internally ln W_ad or ln μh) the profile fixes θ and refits every other parameter.
 The 95 % limits are where the statistic
@@ -58,7 +58,7 @@ class ProfileLimit:
         The probe nearest the optimum whose χ² exceeded the critical value (internal units).
     open : bool
         The data do not bound the parameter on this side: χ² stays below the critical value up to the
-        parameter's bound or to the edge of the model's domain (a one-sided result, DESIGN.md A5b).
+        parameter's bound or to the edge of the model's domain (a one-sided result, docs/contracts.md A5b).
     """
 
     value: float | None

@@ -2,7 +2,7 @@
 
 A :class:`FitResult` never re-runs a fit: it holds the estimates, both slip conditions' fits with their
 predictions and model curves, the slip verdict, warnings and provenance; the optimiser's own objects
-are kept in ``raw``.  :meth:`FitResult.as_dict` gives the report.json content (DESIGN.md A5) with
+are kept in ``raw``.  :meth:`FitResult.as_dict` gives the report.json content (docs/contracts.md A5) with
 ``None`` wherever a number is not finite.
 """
 from __future__ import annotations
@@ -18,7 +18,7 @@ from ..params import FITTED
 
 __all__ = ["Estimate", "SlipFit", "FitResult", "clean", "MODEL"]
 
-#: the membrane model of every fit in this version, and why (DESIGN.md A5b)
+#: the membrane model of every fit in this version, and why (docs/contracts.md A5b)
 MODEL = {"membrane": "large-stretch",
          "why": "The large-stretch membrane of the paper is the model fitted; it is accurate when the "
                 "pre-stretch λ0 is large (its error grows as λ0 approaches 1)."}
@@ -76,7 +76,7 @@ class Estimate:
     ci95_covariance : (float, float) or None
         The covariance interval, kept for comparison with the profile.
     status : {"determined", "lower_bound", "upper_bound", "undetermined"}
-        What the data say (DESIGN.md A5b): a value and a two-sided ``ci95``; a one-sided 95 % bound
+        What the data say (docs/contracts.md A5b): a value and a two-sided ``ci95``; a one-sided 95 % bound
         (``ci95`` = ``(low, None)`` or ``(None, high)``); or nothing.  ``value`` keeps the optimum
         (for plots); the report gives ``value: null`` unless the status is ``determined``.
     """
@@ -201,7 +201,7 @@ class SlipFit:
 
 @dataclass(frozen=True)
 class FitResult:
-    """The result of ``adhfit fit`` (DESIGN.md A5), whatever the method.
+    """The result of ``adhfit fit`` (docs/contracts.md A5), whatever the method.
 
     Attributes
     ----------
@@ -241,7 +241,7 @@ class FitResult:
     observables : tuple of str
         The columns the fit used.
     curves : tuple of dict
-        A global fit's curves (DESIGN.md A7: ``file``, ``offsets``, ``redchi``, ``n_points`` and the
+        A global fit's curves (docs/contracts.md A7: ``file``, ``offsets``, ``redchi``, ``n_points`` and the
         per-curve checks); empty for a single curve.
     """
 
@@ -287,7 +287,7 @@ class FitResult:
         return {k: e for k, e in self.parameters.items() if k not in ("work_of_adhesion", "mu_h")}
 
     def offsets_report(self) -> dict:
-        """``offsets`` of report.json (DESIGN.md A5b): every fitted offset in SI under its short name
+        """``offsets`` of report.json (docs/contracts.md A5b): every fitted offset in SI under its short name
         (``force``, ``displacement``, ``pressure``), ``force`` always present (0.0 with a note when fixed)."""
         if self.curves:  # a global fit: offsets per curve
             return _per_curve_offsets(self.curves)

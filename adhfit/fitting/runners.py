@@ -1,4 +1,4 @@
-"""Where the jobs of a batch run (DESIGN.md A7): local worker processes, or a Dask distributed cluster.
+"""Where the jobs of a batch run (docs/contracts.md A7): local worker processes, or a Dask distributed cluster.
 
 Generic: a job is a call ``fn(*call)`` of a module-level function with picklable arguments that returns
 its own result and never raises for a bad input (see :func:`adhfit.fitting.batch.run_job`).  Results are

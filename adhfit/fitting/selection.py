@@ -1,4 +1,4 @@
-"""Slip selection: compare the no-slip and frictionless fits by AIC and BIC (DESIGN.md B4).
+"""Slip selection: compare the no-slip and frictionless fits by AIC and BIC (docs/numerics.md B4).
 
 A single fit's χ² cannot tell the slip condition (at 0.5 % noise the wrong model's reduced χ² can
 still look acceptable); the comparison of the two fits can.  Both fits have the same data and the

@@ -1,4 +1,4 @@
-"""The joint model of a test series (issue 13, DESIGN.md A7): several curves, one W_ad and one μh.
+"""The joint model of a test series (issue 13, docs/contracts.md A7): several curves, one W_ad and one μh.
 
 Every curve keeps its own :class:`~.model.CurveModel` (its own scene: its own pressure or gap) and its
 own offsets, parametrised exactly as the single-curve fit does (:class:`~.lsq.Parametrisation`: the

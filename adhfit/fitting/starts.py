@@ -1,4 +1,4 @@
-"""Start values from the data (DESIGN.md B4: far-off starts fall into local minima).
+"""Start values from the data (docs/numerics.md B4: far-off starts fall into local minima).
 
 * **offset** (displacement control): the contact point, where a straight line through the loading
   rows with forces between 5 % and 30 % of the largest force reaches zero force;

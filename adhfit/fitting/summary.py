@@ -4,7 +4,7 @@ Standard errors come from lmfit's covariance of the internal parameters (ln W_ad
 offsets) by the delta method; with σ estimated, lmfit has scaled that covariance by the reduced χ².
 95 % intervals of W_ad and μh come from the likelihood profile (:mod:`.profile`) when it converges —
 they are then compared with the covariance intervals, which the infinite slope of the force at the
-turning point can make too narrow (DESIGN.md B4) — else from the covariance (normal in the internal
+turning point can make too narrow (docs/numerics.md B4) — else from the covariance (normal in the internal
 parameter, so log-normal for W_ad and μh).
 """
 from __future__ import annotations
@@ -59,7 +59,7 @@ def _estimates(raw: RawFit, profiles: dict) -> dict[str, Estimate]:
 
 
 def _from_profile(prof, back, ci, method, status):
-    """(ci95, method, status) from a profile's two sides (DESIGN.md A5b)."""
+    """(ci95, method, status) from a profile's two sides (docs/contracts.md A5b)."""
     lo, hi = prof
     if lo.open and hi.open:
         return None, "profile", "undetermined"
@@ -126,7 +126,7 @@ def _diagnostics(raw: RawFit, est: dict, profiles: dict) -> list[str]:
 
 
 def _warnings(raw: RawFit, est: dict, sigma: float, rho: float, factor: float, split) -> list[str]:
-    """Plain sentences a lab user understands (DESIGN.md A5b)."""
+    """Plain sentences a lab user understands (docs/contracts.md A5b)."""
     m, best = raw.model, raw.best
     out = []
     for name, e in est.items():

@@ -1,4 +1,4 @@
-"""Reading measured curves as instruments write them (DESIGN.md A4b).
+"""Reading measured curves as instruments write them (docs/contracts.md A4b).
 
 :mod:`.text` decodes a file and finds its layout (separator, decimal mark, metadata lines, header,
 units row, data lines); :mod:`.lvm` does the same for LabVIEW ``.lvm`` files from their header

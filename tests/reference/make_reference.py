@@ -115,7 +115,7 @@ def main(argv=None) -> int:
         "dps": M.DPS,
         "python": platform.python_version(),
         "conventions": {
-            "units": "dimensionless, DESIGN.md A1 (lengths over b; f = F/(2 mu h b); w = W_ad/(mu h))",
+            "units": "dimensionless, docs/contracts.md A1 (lengths over b; f = F/(2 mu h b); w = W_ad/(mu h))",
             "inputs": "IEEE doubles taken at their exact binary value; rs 'inf' = flat substrate",
             "locators": "making_contact and delamination: a; pinning: alpha (radians)",
             "values": "strings with 30 significant digits; null where undefined (delta for |p| > 1)",

@@ -5,7 +5,7 @@ adaptive quadrature and hand-written root solves. It deliberately shares nothing
 no Carlson closed forms, no imports from the engine. Use it to hold the engine to account, never as
 the engine.
 
-Dimensionless throughout (DESIGN.md A1, B1): lengths over b, kappa = p = P b / (2 mu h), D = kappa C1,
+Dimensionless throughout (docs/contracts.md A1, B1): lengths over b, kappa = p = P b / (2 mu h), D = kappa C1,
 C2 = Cbar2 / b**2, so that eq. (38) reads
 
     sin(theta) = (kappa r**2 + D) / sqrt(r**2 + C2),
@@ -14,7 +14,7 @@ C2 = Cbar2 / b**2, so that eq. (38) reads
     J1 = int (kappa r**2 + D) / sqrt(Q) dr   -> -z(a), eqs. (25), (46)-(48), (58)
 
 with f = F / (2 mu h b) = -pi D (eqs. 26, 50, 59). The material coordinate enters only through
-L = ln(beta / rho_a), so lambda0 drops out of every observable (DESIGN.md C).
+L = ln(beta / rho_a), so lambda0 drops out of every observable (docs/numerics.md C).
 
 Quadrature: in u = r**2, Q is a quadratic with roots u_minus <= u_plus (u_plus = inf when kappa = 0).
 Tanh-sinh on an integrand with a 1/sqrt endpoint singularity loses about half the digits, so the
@@ -71,7 +71,7 @@ def _sag(a: mp.mpf, rs: mp.mpf) -> mp.mpf:
 def d0(p) -> mp.mpf | None:
     """Free-inflation apex deflection over b, eq. (15) in the form kappa / (1 + sqrt(1 - kappa**2)).
 
-    Returns None for |p| > 1, where the Case I cap does not exist (DESIGN.md A2).
+    Returns None for |p| > 1, where the Case I cap does not exist (docs/contracts.md A2).
     """
     p = _mpf(p)
     if abs(p) > 1:
@@ -171,7 +171,7 @@ def integrals(kap, D, C2, a, folded: bool = False) -> tuple[mp.mpf, mp.mpf]:
         Contact radius over b.
     folded : bool
         True when theta_a > pi/2 (no slip only): the membrane first runs inward to r = eta, where
-        theta = pi/2 and eta**2 is the smaller root of Q (eq. 44, DESIGN.md C), then out to r = 1.
+        theta = pi/2 and eta**2 is the smaller root of Q (eq. 44, docs/numerics.md C), then out to r = 1.
         Eqs. (42) (with the corrected, positive sign) and (47).
 
     Returns
@@ -541,7 +541,7 @@ def state(control, slip, stage, *, p=None, d=None, w, rs, a_max, a=None, alpha=N
         Locators: making contact a in (0, a_max]; pinning alpha in [0, alpha_onset];
         delamination a in (0, a_onset].
     p, d, w, rs, a_max : float or mpf
-        Dimensionless inputs (DESIGN.md A1); rs may be inf.
+        Dimensionless inputs (docs/contracts.md A1); rs may be inf.
 
     Returns
     -------
