@@ -126,7 +126,7 @@ def provenance(argv: list[str], wall: float | None, workers: int) -> dict:
     dirty = bool(_git("status", "--porcelain", "--", "adhfit"))
     return {"command": "python benchmarks/recovery.py " + " ".join(argv),
             "commit": (_git("rev-parse", "--short", "HEAD") or "?") + ("+dirty" if dirty else ""),
-            "trust_commit": _git("rev-parse", "--short", "trust"), "adhfit": adhfit.__version__,
+            "adhfit": adhfit.__version__,
             "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
             "wall_s": None if wall is None else round(wall, 1),
             "workers": workers, "python": platform.python_version(), "numpy": np.__version__,

@@ -101,7 +101,7 @@ def write_markdown(out: dict, path: Path) -> None:
     """OUT.md: provenance, the pooled table (variant x noise), the per-cell table, failures."""
     p, st = out["provenance"], out["settings"]
     text = [f"# Parameter recovery ({st['method']})\n",
-            f"Command: `{p['command']}`  \nadhfit commit {p['commit']} (trust branch at {p['trust_commit']}), "
+            f"Command: `{p['command']}`  \nadhfit commit {p['commit']}, "
             f"{p['date_utc']} UTC, {len(out['replicates'])} fits in "
             f"{'?' if p['wall_s'] is None else round(p['wall_s'])} s on {p['workers']} "
             f"worker(s), Python {p['python']}, {p['nproc']} cores.\n" + (f"\n**{p['partial']}**\n" if p.get("partial") else ""),
