@@ -43,11 +43,15 @@ class History:
         ``f_max``, ``onset``, ``f_min``, ``turning_point`` (docs/contracts.md A2 ``--json``).
     inputs : dict
         The validated inputs, with the resolved ``a_max``.
+    counts : tuple of int
+        Rows of making contact (with the free-inflation row), pinning and delamination; empty when
+        not known (read the ``stage`` column).
     """
 
     columns: dict
     summary: dict
     inputs: dict = field(default_factory=dict)
+    counts: tuple = ()
 
 
 
@@ -203,7 +207,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
                "f_min": _point(rows[1], pc, dpt), "turning_point": _point(rows[2], pc, dpt)}
     if branch_end == branch_end:  # not NaN: the quasi-static branch ends; detachment is dynamic
         info["delamination_ends_at_a"] = float(branch_end)
-    return History(cols, summary, info)
+    return History(cols, summary, info, tuple(int(n) for n in counts))
 
 
 _STAGE_OF = {1: "pinning", 2: "delamination"}

@@ -25,9 +25,9 @@ value: rows just before and just after the jump may share a displacement) and a 
 largest rise of the force toward zero after the most negative force, kept only when it is large
 against the noise), which is now only a first guess for reports.
 
-For each parameter set one history is computed with :func:`adhfit.simulate` (``points`` rows), ending
-the loading at the data's largest control value, and the force is interpolated along its monotone
-pieces: making contact in the control variable x (δ/b or p), pinning and delamination in
+For each parameter set one history is computed as arrays (:func:`adhfit.loading.history`, or the
+exact membrane's; no table), ``points`` rows ending the loading at the data's largest control value,
+and the force is interpolated along its monotone pieces by compiled kernels (:mod:`adhfit.core.pieces`): making contact in the control variable x (δ/b or p), pinning and delamination in
 u = sqrt(x - x_tp).  The force has an infinite slope dF/dx at the turning point x_tp but is smooth in
 u (x - x_tp is quadratic in the branch's locator there), and the pinning/delamination kink at the
 onset is a node of both pieces, so the piecewise-cubic (PCHIP) interpolants are accurate to ~1e-4 of
@@ -37,17 +37,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from ..errors import AdhfitError, InputError
-from ..simulation import simulate
+from ..loading import COLUMNS, history
 from .options import DEFAULT_POINTS
 from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
-           "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS"]
+           "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS", "pieces_from_columns"]
 
 #: dimensionless control variable of each control mode (docs/contracts.md A1)
 CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
@@ -70,7 +70,10 @@ class ModelDomainError(AdhfitError, ValueError):
 
 @dataclass(frozen=True)
 class Pieces:
-    """Interpolants of one dimensionless history (x = δ/b or p; f = F/(2 μh b)).
+    """The force along one dimensionless history as monotone pieces (x = δ/b or p; f = F/(2 μh b)).
+
+    Built and evaluated by compiled kernels (:mod:`adhfit.core.pieces`): making contact as f(x),
+    pinning and delamination as f(u), u = sqrt(x - x_tp), PCHIP through the history's own rows.
 
     Attributes
     ----------
@@ -80,12 +83,16 @@ class Pieces:
         The turning point (least x on the way out) and its force.
     x_onset : float
         Control value at the onset of delamination.
-    loading : PchipInterpolator
-        f(x) on making contact, x in [x_contact, x_max].
-    retraction : list of (u_lo, u_hi, PchipInterpolator)
-        f(u), u = sqrt(x - x_tp), one piece per stage (pinning, delamination).
-    frame : pandas.DataFrame
-        The history itself (for plots and reports).
+    loading : tuple of ndarray
+        Nodes, values and slopes of f(x) on making contact.
+    retraction : tuple
+        Nodes, values, slopes and piece starts of f(u) on pinning and delamination.
+    columns : dict of str -> ndarray
+        The history itself (:attr:`adhfit.loading.History.columns`); :attr:`frame` is it as a table.
+    counts : tuple of int
+        Rows of making contact, pinning and delamination in ``columns``.
+    key : str
+        The control column, ``"delta"`` or ``"p"``.
     """
 
     x_contact: float
@@ -93,63 +100,80 @@ class Pieces:
     x_tp: float
     f_tp: float
     x_onset: float
-    loading: PchipInterpolator
-    retraction: list
-    frame: object
+    loading: tuple
+    retraction: tuple
+    columns: dict
+    counts: tuple
+    key: str
+
+    @cached_property
+    def frame(self):
+        """The history as a pandas DataFrame (docs/contracts.md A2 columns; for plots and reports)."""
+        import pandas as pd  # noqa: PLC0415 - only reports need the table
+        return pd.DataFrame({k: self.columns[k] for k in COLUMNS})
+
+    @cached_property
+    def _radius(self) -> tuple:
+        """The contact radius a/b as pieces, like the force's (built on first use)."""
+        k = _kernels()
+        x = np.ascontiguousarray(self.columns[self.key], float)
+        a = np.ascontiguousarray(self.columns["a"], float)
+        tp_pos = int(np.count_nonzero(self.columns["stable"])) - 1
+        *retraction, _, a_tp, _ = k.retraction_nodes(x, a, *self.counts, tp_pos)
+        return k.loading_nodes(x, a, self.counts[0]), tuple(retraction), float(a_tp)
+
+    def a_loading(self, x: np.ndarray) -> np.ndarray:
+        """Contact radius a/b on loading: zero before contact."""
+        nodes = self._radius[0]
+        return np.maximum(_kernels().loading_values(*nodes, np.ascontiguousarray(x, float)), 0.0)
+
+    def a_unloading(self, x: np.ndarray) -> np.ndarray:
+        """Contact radius a/b on the way out while attached; the turning point's beyond it."""
+        _, retraction, a_tp = self._radius
+        out = _kernels().retraction_values(*retraction, self.x_tp, a_tp, np.ascontiguousarray(x, float))
+        return np.maximum(out, 0.0)
 
     def f_loading(self, x: np.ndarray) -> np.ndarray:
-        """Force on loading: zero before contact, making contact after."""
-        xc = np.clip(x, self.x_contact, self.x_max)
-        return np.where(x <= self.x_contact, 0.0, self.loading(xc))
+        """Force on loading: zero before contact, making contact after (clamped at the end)."""
+        return _kernels().loading_values(*self.loading, np.ascontiguousarray(x, float))
 
     def f_unloading(self, x: np.ndarray) -> np.ndarray:
         """Force on the way out while attached; clamped to the turning point beyond it."""
-        u = np.sqrt(np.clip(x - self.x_tp, 0.0, None))
-        out = np.full(u.shape, self.f_tp)
-        for lo, hi, interp in self.retraction:
-            m = (u >= lo) & (u <= hi)
-            out[m] = interp(u[m])
-        top = self.retraction[-1][1] if self.retraction else 0.0
-        if self.retraction:
-            out[u > top] = self.retraction[-1][2](top)
-        return out
+        return _kernels().retraction_values(*self.retraction, self.x_tp, self.f_tp,
+                                            np.ascontiguousarray(x, float))
 
 
-def _piece(x: np.ndarray, f: np.ndarray, x_tp: float):
-    """(u_lo, u_hi, interpolant) of f against u = sqrt(x - x_tp) over rows in history order."""
-    u = np.sqrt(np.clip(x - x_tp, 0.0, None))[::-1]
-    f = f[::-1]
-    keep = np.concatenate([[True], np.diff(u) > 0])
-    u, f = u[keep], f[keep]
-    if u.size < 2:
-        return None
-    return float(u[0]), float(u[-1]), PchipInterpolator(u, f, extrapolate=True)
+_PIECES = []
 
 
-def pieces_from_frame(frame, control: str) -> Pieces:
-    """Build the interpolants of one history frame (:func:`adhfit.simulate` output)."""
+def _kernels():
+    """:mod:`adhfit.core.pieces`, imported on first use (``import adhfit`` does not load numba)."""
+    if not _PIECES:
+        from ..core import pieces  # noqa: PLC0415 - compiled kernels load with the engine
+        _PIECES.append(pieces)
+    return _PIECES[0]
+
+
+def stage_counts(columns: dict) -> tuple[int, int, int]:
+    """Rows of making contact, pinning and delamination of a history's columns."""
+    stage = np.asarray(columns["stage"])
+    return tuple(int(np.count_nonzero(stage == s)) for s in ("making_contact", "pinning", "delamination"))
+
+
+def pieces_from_columns(columns: dict, control: str, counts: tuple = ()) -> Pieces:
+    """Build the force's pieces of one history (:attr:`adhfit.loading.History.columns`;
+    ``counts``: its rows per stage, read from the ``stage`` column when not given)."""
+    n_mc, n_pin, n_dl = counts or stage_counts(columns)
     key = CONTROL_KEY[control]
-    stage = frame["stage"].to_numpy()
-    stable = frame["stable"].to_numpy(bool)
-    x, f = frame[key].to_numpy(float), frame["f"].to_numpy(float)
-    mc = np.flatnonzero(stage == "making_contact")
-    xl, fl = x[mc], f[mc]
-    keep = np.concatenate([[True], np.diff(xl) > 0])
-    loading = PchipInterpolator(xl[keep], fl[keep], extrapolate=True)
-    j_tp = int(np.flatnonzero(stable)[-1])
-    x_tp, f_tp = float(x[j_tp]), float(f[j_tp])
-    pin = np.flatnonzero((stage == "pinning") & stable)
-    dl = np.flatnonzero((stage == "delamination") & stable)
-    parts = []
-    pin_rows = np.concatenate([[mc[-1]], pin])  # retraction starts at the end of loading
-    parts.append(_piece(x[pin_rows], f[pin_rows], x_tp))
-    onset = pin[-1] if pin.size else mc[-1]
-    if dl.size:
-        rows = np.concatenate([[onset], dl])
-        parts.append(_piece(x[rows], f[rows], x_tp))
-    parts = sorted((p for p in parts if p is not None), key=lambda p: p[0])
-    return Pieces(x_contact=float(xl[0]), x_max=float(xl[-1]), x_tp=x_tp, f_tp=f_tp,
-                  x_onset=float(x[onset]), loading=loading, retraction=parts, frame=frame)
+    x = np.ascontiguousarray(columns[key], float)
+    f = np.ascontiguousarray(columns["f"], float)
+    tp_pos = int(np.count_nonzero(columns["stable"])) - 1
+    k = _kernels()
+    loading = k.loading_nodes(x, f, n_mc)
+    *retraction, x_tp, f_tp, x_onset = k.retraction_nodes(x, f, n_mc, n_pin, n_dl, tp_pos)
+    return Pieces(x_contact=float(loading[0][0]), x_max=float(loading[0][-1]), x_tp=float(x_tp),
+                  f_tp=float(f_tp), x_onset=float(x_onset), loading=loading,
+                  retraction=tuple(retraction), columns=columns, counts=(n_mc, n_pin, n_dl), key=key)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -187,7 +211,9 @@ class CurveModel:
         if curve.control != scene.control:
             raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
         self.curve, self.scene, self.slip, self.points = curve, scene, slip, int(points)
-        self.control, self.membrane = scene.control, membrane  # "large-stretch" or "exact" (simulate's)
+        if membrane not in ("large-stretch", "exact"):
+            raise InputError("membrane", membrane, "'large-stretch' or 'exact'")
+        self.control, self.membrane = scene.control, membrane
         self.segments = segments if segments is not None else segment(curve)
         self.x = np.asarray(curve.x, float)
         self.force = np.asarray(curve.force, float)
@@ -202,24 +228,41 @@ class CurveModel:
         steps = steps[steps > 0]
         self.spacing = float(np.median(steps)) if steps.size else 1e-9 * max(abs(self.x_max), 1e-30)
         self._cache: dict = {}
+        self._scales_memo = None
+        unit = scene.scales(1.0)  # groups that do not depend on μh, converted once
+        self._fixed = {"control": self.control, "slip": slip, "rs": float(unit.to_rs(scene.substrate_radius)),
+                       "lambda0": float(scene.prestretch)}
+        if self.control == "pressure":
+            self._fixed["d"] = float(unit.to_d(scene.gap))
         self.n_histories = 0
         self.n_evaluations = 0
 
     def groups(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> dict:
-        """Keyword arguments of :func:`adhfit.simulate` for these parameters (loading end from data)."""
-        try:
-            kw = self.scene.to_dimensionless(mu_h=float(mu_h), work_of_adhesion=float(work_of_adhesion),
-                                             slip=self.slip)
-        except InputError as err:
-            raise ModelDomainError(str(err), self._named(work_of_adhesion, mu_h, x_offset)) from None
-        for end in ("a_max", "delta_max", "p_max"):
-            kw.pop(end, None)
-        scales = self.scene.scales(float(mu_h))
+        """Keyword arguments of :func:`adhfit.simulate` for these parameters (loading end from data).
+
+        The scene was converted once (:meth:`__init__`); here only the groups that scale with μh
+        and W_ad are formed.  Their ranges are checked where the history is computed.
+        """
+        w, mu = float(work_of_adhesion), float(mu_h)
+        if not (math.isfinite(w) and math.isfinite(mu) and w > 0.0 and mu > 0.0):
+            raise ModelDomainError("work_of_adhesion and mu_h must be finite and positive",
+                                   self._named(work_of_adhesion, mu_h, x_offset))
+        sc = self._scales(mu)
+        kw = dict(self._fixed)
+        kw["w"] = w / sc.energy
         if self.control == "displacement":
-            kw["delta_max"] = scales.to_delta(self.x_max + x_offset)
+            kw["p"] = self.scene.pressure / sc.pressure
+            kw["delta_max"] = (self.x_max + x_offset) / sc.length
         else:
-            kw["p_max"] = scales.to_p(self.x_max + x_offset)
+            kw["p_max"] = (self.x_max + x_offset) / sc.pressure
         return kw
+
+    def _scales(self, mu_h: float):
+        """The scene's :class:`~adhfit.units.Scales` at ``mu_h`` (the last one is kept)."""
+        memo = self._scales_memo
+        if memo is None or memo[0] != mu_h:
+            memo = self._scales_memo = (mu_h, self.scene.scales(mu_h))
+        return memo[1]
 
     def _named(self, w, mu, off) -> dict:
         return {"work_of_adhesion": float(w), "mu_h": float(mu), OFFSET_NAME[self.control]: float(off)}
@@ -234,8 +277,11 @@ class CurveModel:
         for extra in RETRY_POINTS:
             try:
                 self.n_histories += 1
-                pcs = pieces_from_frame(simulate(**kw, points=self.points + extra, membrane=self.membrane).frame, self.control)
+                h = self._history(kw, self.points + extra)
+                pcs = pieces_from_columns(h.columns, self.control, getattr(h, "counts", ()))
                 break
+            except InputError as err:  # a group out of range: no other row count helps
+                raise ModelDomainError(str(err), self._named(*key)) from None
             except (AdhfitError, ValueError, IndexError) as err:
                 failure = err
         if pcs is None:
@@ -245,11 +291,21 @@ class CurveModel:
         self._cache[key] = pcs
         return pcs
 
+    def _history(self, kw: dict, points: int):
+        """One history as arrays (no table): the large-stretch engine or the exact membrane."""
+        if self.membrane == "exact":
+            from ..exact.history import exact_history  # noqa: PLC0415 - the exact model loads on demand
+            return exact_history(**kw, points=points)
+        return history(**kw, points=points)
+
     def dimensionless_x(self, mu_h: float, x_offset: float, x: np.ndarray | None = None) -> np.ndarray:
         """The measured control values (or ``x``) as δ/b or p (with the offset)."""
-        scales = self.scene.scales(float(mu_h))
-        shifted = (self.x if x is None else x) + x_offset
-        return scales.to_delta(shifted) if self.control == "displacement" else scales.to_p(shifted)
+        return ((self.x if x is None else x) + x_offset) * self._x_factor(float(mu_h))
+
+    def _x_factor(self, mu_h: float) -> float:
+        """Measured control value (m or Pa) -> its group (δ/b or p = P b/(2 μh))."""
+        sc = self._scales(mu_h)
+        return 1.0 / (sc.length if self.control == "displacement" else sc.pressure)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
                 force_offset: float = 0.0) -> np.ndarray:
@@ -279,7 +335,7 @@ class CurveModel:
         f[self._attached] = pcs.f_unloading(xd[self._attached])
         if not self.fixed_split:
             f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
-        return self.scene.scales(float(mu_h)).from_f(f) + force_offset
+        return f * self._scales(float(mu_h)).force + force_offset
 
     def attached_weight(self, mu_h: float, x_offset: float, pcs: Pieces) -> np.ndarray:
         """Weight (0 detached .. 1 attached) of every unloading row, from the model's turning point.
@@ -295,8 +351,7 @@ class CurveModel:
         if not self._run_min.size:
             return self._run_min
         run = self.dimensionless_x(mu_h, x_offset, self._run_min)
-        h = abs(float(self.dimensionless_x(mu_h, x_offset, np.array([self.x_max]))[0]
-                      - self.dimensionless_x(mu_h, x_offset, np.array([self.x_max - self.spacing]))[0]))
+        h = abs(self.spacing * self._x_factor(float(mu_h)))
         return np.clip(0.5 + (run - pcs.x_tp) / max(h, 1e-300), 0.0, 1.0)
 
     def split(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> int | None:
@@ -327,7 +382,7 @@ class CurveModel:
     def turning_point(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> tuple[float, float]:
         """The model's turning point (pull-off) in measured units: (control value, force in N)."""
         pcs = self.pieces(work_of_adhesion, mu_h, x_offset)
-        sc = self.scene.scales(float(mu_h))
+        sc = self._scales(float(mu_h))
         x = sc.from_delta(pcs.x_tp) if self.control == "displacement" else sc.from_p(pcs.x_tp)
         return float(x) - x_offset, float(sc.from_f(pcs.f_tp))
 

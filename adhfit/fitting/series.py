@@ -24,7 +24,7 @@ import lmfit
 import numpy as np
 
 from .lsq import PENALTY, Parametrisation, residual_function
-from .model import CONTROL_KEY, CurveModel, ModelDomainError, _piece
+from .model import CurveModel, ModelDomainError
 
 __all__ = ["RadiusData", "Member", "SeriesParametrisation", "radius_prediction", "radius_data",
            "series_residual", "Values"]
@@ -73,59 +73,6 @@ def radius_data(curve) -> RadiusData | None:
                       n_zero=int(np.count_nonzero(a[rows] == 0)))
 
 
-@dataclass
-class _APieces:
-    """Interpolants of a/b along one history (same pieces as the force's, :class:`~.model.Pieces`)."""
-
-    x_contact: float
-    x_max: float
-    x_tp: float
-    a_tp: float
-    loading: object
-    retraction: list
-
-    def loading_a(self, x: np.ndarray) -> np.ndarray:
-        xc = np.clip(x, self.x_contact, self.x_max)
-        return np.where(x <= self.x_contact, 0.0, np.clip(self.loading(xc), 0.0, None))
-
-    def unloading_a(self, x: np.ndarray) -> np.ndarray:
-        u = np.sqrt(np.clip(x - self.x_tp, 0.0, None))
-        out = np.full(u.shape, self.a_tp)
-        for lo, hi, interp in self.retraction:
-            m = (u >= lo) & (u <= hi)
-            out[m] = interp(u[m])
-        if self.retraction:
-            top = self.retraction[-1][1]
-            out[u > top] = self.retraction[-1][2](top)
-        return np.clip(out, 0.0, None)
-
-
-def _a_pieces(frame, control: str) -> _APieces:
-    """Build a/b interpolants from a history frame, with the rows :func:`~.model.pieces_from_frame` uses."""
-    from scipy.interpolate import PchipInterpolator  # noqa: PLC0415
-    key = CONTROL_KEY[control]
-    stage, stable = frame["stage"].to_numpy(), frame["stable"].to_numpy(bool)
-    x, a = frame[key].to_numpy(float), frame["a"].to_numpy(float)
-    mc = np.flatnonzero(stage == "making_contact")
-    xl, al = x[mc], a[mc]
-    keep = np.concatenate([[True], np.diff(xl) > 0])
-    loading = PchipInterpolator(xl[keep], al[keep], extrapolate=True)
-    j_tp = int(np.flatnonzero(stable)[-1])
-    x_tp = float(x[j_tp])
-    pin = np.flatnonzero((stage == "pinning") & stable)
-    dl = np.flatnonzero((stage == "delamination") & stable)
-    parts = [_piece(x[np.concatenate([[mc[-1]], pin])], a[np.concatenate([[mc[-1]], pin])], x_tp)]
-    onset = pin[-1] if pin.size else mc[-1]
-    if dl.size:
-        rows = np.concatenate([[onset], dl])
-        parts.append(_piece(x[rows], a[rows], x_tp))
-    parts = sorted((p for p in parts if p is not None), key=lambda p: p[0])
-    return _APieces(float(xl[0]), float(xl[-1]), x_tp, float(a[j_tp]), loading, parts)
-
-
-_A_CACHE: dict = {}
-
-
 def radius_prediction(model: CurveModel, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> np.ndarray:
     """The model's contact radius (m) at every measured row of ``model``'s curve.
 
@@ -135,23 +82,15 @@ def radius_prediction(model: CurveModel, work_of_adhesion: float, mu_h: float, x
         The parameters leave the model's domain.
     """
     pcs = model.pieces(work_of_adhesion, mu_h, x_offset)
-    key = id(pcs.frame)
-    ap = _A_CACHE.get(key)
-    if ap is None or ap[0] is not pcs.frame:
-        if len(_A_CACHE) > 64:
-            _A_CACHE.clear()
-        ap = (pcs.frame, _a_pieces(pcs.frame, model.control))
-        _A_CACHE[key] = ap
-    ap = ap[1]
     xd = model.dimensionless_x(mu_h, x_offset)
     seg = model.segments
     n = xd.size
     loading = seg.loading
     attached = seg.attached if model.fixed_split else np.arange(n) > seg.i_turn
     a = np.zeros(n)
-    a[loading] = ap.loading_a(xd[loading])
+    a[loading] = pcs.a_loading(xd[loading])
     if attached.any():
-        a[attached] = ap.unloading_a(xd[attached]) * model.attached_weight(mu_h, x_offset, pcs)
+        a[attached] = pcs.a_unloading(xd[attached]) * model.attached_weight(mu_h, x_offset, pcs)
     return a * model.scene.membrane_radius
 
 

@@ -149,8 +149,8 @@ def data_start(model: CurveModel, *, fit_offset: bool, fit_force_offset: bool = 
     if f_min < 0:
         def pull_off(w):
             pcs = model.pieces(w * mu, mu, off)
-            stable = pcs.frame["stable"].to_numpy(bool)
-            f_po = float(pcs.frame["f"].to_numpy(float)[stable].min())
+            stable = np.asarray(pcs.columns["stable"], bool)
+            f_po = float(np.asarray(pcs.columns["f"], float)[stable].min())
             return model.scene.scales(mu).from_f(f_po) / f_min - 1.0
         ws = _roots_log(pull_off, 1e-3, 10.0, n=13) or [0.1]
     best = _best(model, [{"work_of_adhesion": w * mu, "mu_h": mu, "x_offset": off} for w in ws],
