@@ -9,17 +9,39 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, NoReturn
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
-import pint
 
 from .errors import DataError, InputError
 
-__all__ = ["ureg", "DIMENSIONS", "GROUPS", "Scales", "parse_quantity", "unit_factor"]
+if TYPE_CHECKING:
+    import pint
 
-#: The package's single unit registry.  Create no other: quantities from two registries do not mix.
-ureg = pint.UnitRegistry()
+__all__ = ["ureg", "registry", "DIMENSIONS", "GROUPS", "Scales", "parse_quantity", "unit_factor"]
+
+
+@lru_cache(maxsize=1)
+def registry() -> pint.UnitRegistry:
+    """The package's single unit registry, made on first use (``ureg`` is the same object).
+
+    pint parses its definitions file on every new registry (~0.2 s); with ``cache_folder=":auto:"``
+    it keeps the parsed definitions in the user's cache folder and a later process loads them in
+    ~10 ms.  Where that folder cannot be written the registry is built without the cache.
+    Create no other registry: quantities from two registries do not mix.
+    """
+    import pint  # noqa: PLC0415 - pint loads only when a unit is parsed
+    try:
+        return pint.UnitRegistry(cache_folder=":auto:")
+    except OSError:
+        return pint.UnitRegistry()
+
+
+def __getattr__(name: str) -> Any:  # ``adhfit.units.ureg``, made on first use
+    if name == "ureg":
+        return registry()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 #: Physical dimensions adhfit accepts: key -> (pint dimensionality, noun phrase, example).
 #: ``energy_per_area`` (W_ad) and ``force_per_length`` (mu h) share a dimensionality; they differ
@@ -57,7 +79,7 @@ def _unit_quantity(text: str) -> pint.Quantity:
         # pint would read '1,2 kPa' as 12 kPa and drop '# ...' silently.
         raise ValueError("commas and '#' are not allowed in units")
     try:
-        q = ureg.Quantity(text)
+        q = registry().Quantity(text)
         q.to_base_units()
     except Exception as exc:  # pint raises many unrelated types (TokenError, AssertionError, ...)
         raise ValueError(str(exc) or type(exc).__name__) from exc

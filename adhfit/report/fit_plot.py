@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import STAGE_COLORS, _pyplot
+from .plots import STAGE_COLORS, _pyplot, file_figure
 
 __all__ = ["plot_fit"]
 
@@ -94,7 +94,8 @@ def plot_fit(result, *, ax=None, path: str | Path | None = None, residuals: bool
     ----------
     result : FitResult
     ax : matplotlib Axes, optional
-        Draw the main panel here (no residual panel); a new figure with a residual panel otherwise.
+        Draw the main panel here (no residual panel); a new figure with a residual panel otherwise
+        (a pyplot figure, shown in a notebook, unless ``path`` is given: then a figure of its own).
     path : path, optional
         Save the figure there.
     residuals : bool
@@ -105,15 +106,15 @@ def plot_fit(result, *, ax=None, path: str | Path | None = None, residuals: bool
     matplotlib.axes.Axes
         The main panel.
     """
-    plt = _pyplot()
     kx, xlabel = _axis(result.curve.control)
     rax = None
     if ax is None:
+        subplots = file_figure if path is not None else _pyplot().subplots
         if residuals:
-            fig, (ax, rax) = plt.subplots(2, 1, figsize=(7.0, 6.2), sharex=True, layout="constrained",
-                                          gridspec_kw={"height_ratios": (3, 1)})
+            fig, (ax, rax) = subplots(2, 1, figsize=(7.0, 6.2), sharex=True, layout="constrained",
+                                      gridspec_kw={"height_ratios": (3, 1)})
         else:
-            fig, ax = plt.subplots(figsize=(7.0, 4.6), layout="constrained")
+            fig, ax = subplots(figsize=(7.0, 4.6), layout="constrained")
     _main(ax, result, kx)
     if rax is not None:
         c = result.curve

@@ -181,15 +181,13 @@ def _section_other(d: Mapping[str, Any]) -> str:
 def _fit_figure(result) -> bytes | None:
     """The fit plot of a FitResult as PNG bytes (None if it cannot be drawn)."""
     try:
+        import io  # noqa: PLC0415
         from .fit_plot import plot_fit  # noqa: PLC0415
-        ax = plot_fit(result)
+        buf = io.BytesIO()
+        plot_fit(result, path=buf)
     except Exception:  # noqa: BLE001 - a report without its plot beats no report; the page says so
         return None
-    from .html_parts import png_bytes  # noqa: PLC0415
-    import matplotlib.pyplot as plt  # noqa: PLC0415
-    png = png_bytes(ax.figure)
-    plt.close(ax.figure)
-    return png
+    return buf.getvalue()
 
 
 _CAPTIONS = {"fit.png": "Data, both fitted curves, residuals; fitted values with 95 % intervals in the box",

@@ -17,7 +17,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from .html_parts import e, figure, num, page, table
-from .plots import _pyplot
+from .plots import file_figure
 from .text import display, estimate_text, interval_text, status_text
 
 __all__ = ["write_summary_html", "render_summary_html", "write_plot_data"]
@@ -81,9 +81,8 @@ def _intervals(reports: list[dict | None], name: str):
 
 
 def _across(reports: list[dict | None], labels: list[str]):
-    plt = _pyplot()
     n = len(reports)
-    fig, axes = plt.subplots(1, 2, figsize=(9.0, max(2.2, 0.32 * n + 1.2)), layout="constrained", sharey=True)
+    fig, axes = file_figure(1, 2, figsize=(9.0, max(2.2, 0.32 * n + 1.2)), layout="constrained", sharey=True)
     y = np.arange(n)[::-1]
     for ax, name in zip(axes, _PARAMS):
         sym, _, k, unit = display(name)
@@ -107,11 +106,10 @@ def _across(reports: list[dict | None], labels: list[str]):
 
 
 def _multiples(plots: list[dict | None], labels: list[str], reports: list[dict | None]):
-    plt = _pyplot()
     n = len(plots)
     cols = min(4, n)
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.1 * rows), layout="constrained", squeeze=False)
+    fig, axes = file_figure(rows, cols, figsize=(2.6 * cols, 2.1 * rows), layout="constrained", squeeze=False)
     for i, ax in enumerate(axes.flat):
         if i >= n:
             ax.set_visible(False)
@@ -187,14 +185,12 @@ def render_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -
            "reduced χ²", "warnings"]
     body.append(table(hdr, [_row_html(i + 1, r, rep, lbl, outdir)
                             for i, (r, rep, lbl) in enumerate(zip(rows, reports, labels))], numeric=(0, 2, 3, 4, 5, 7, 8)))
-    import matplotlib.pyplot as plt  # noqa: PLC0415
     if rows:
         for fig, title, caption in ((_across(reports, labels), "values",
                                      "W_ad and μh of every curve with 95 % intervals (an orange arrow: a one-sided bound)"),
                                     (_multiples(plots, labels, reports), "curves",
                                      "Every curve (blue: data) with its reported fit (red)")):
             body.append(f"<h2>{e(caption)}</h2>" + figure(title, fig, " "))
-            plt.close(fig)
     return page(f"adhfit batch: {len(rows)} curves", body).replace("max-width:62em", "max-width:80em", 1)
 
 
