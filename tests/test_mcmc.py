@@ -77,8 +77,16 @@ def test_seeded_runs_repeat_and_hdf5(tmp_path):
     assert a.groups == ["no-slip/ensemble_0", "no-slip/ensemble_1"]
     back = open_chain(tmp_path / "chain.h5", "no-slip/ensemble_1")
     np.testing.assert_array_equal(back.get_chain(), a.chain[1])
-    c = sample_posterior(g, g.mean, g.cov, **(kw | {"seed": 43}))
+    np.testing.assert_array_equal(back.get_log_prob(), a.log_prob[1])
+    assert back.iteration == a.chain.shape[1] and back.shape == (a.chain.shape[2], a.chain.shape[3])
+    assert (back.accepted > 0).all() and back.random_state is not None
+    with back.open() as f:
+        assert f["no-slip/ensemble_1"].attrs["adhfit_burn"] == a.burn
+    c = sample_posterior(g, g.mean, g.cov, path=tmp_path / "chain.h5", group="no-slip", **(kw | {"seed": 43}))
     assert not np.array_equal(a.chain, c.chain)
+    # a new run to the same file replaces the group (no leftover steps of the old run)
+    again = open_chain(tmp_path / "chain.h5", "no-slip/ensemble_1")
+    np.testing.assert_array_equal(again.get_chain(), c.chain[1])
 
 
 # --- the real model: one small synthetic curve, tiny chains --------------------------------------------------

@@ -30,8 +30,9 @@ Randomness and storage
 ----------------------
 Seeds for the ensembles come from ``numpy.random.SeedSequence(seed)``; each ensemble's emcee
 internals get ``numpy.random.RandomState(seed_k)`` through ``sampler.random_state``; nothing global
-is seeded.  With ``path`` given, every ensemble is written by emcee's ``HDFBackend`` to group
-``"<slip>/ensemble_<k>"`` of that file (inspect with :func:`open_chain`).  Likelihood evaluations run
+is seeded.  The chains are kept in memory while sampling; with ``path`` given, every ensemble is then
+written once, in emcee's ``HDFBackend`` layout, to group ``"<slip>/ensemble_<k>"`` of that file
+(inspect with :func:`open_chain`).  Likelihood evaluations run
 on ``workers`` processes (fork) when more than one is asked for; results do not depend on it.
 """
 from __future__ import annotations
@@ -220,18 +221,32 @@ def open_chain(path, group: str):
     return emcee.backends.HDFBackend(str(path), name=group, read_only=True)
 
 
-def _backend(path, group: str):
-    if path is None:
-        return None, None
+def _save(path, group: str, sampler, attrs: dict) -> str | None:
+    """Write one ensemble's whole run to ``path`` once, as emcee's ``HDFBackend`` lays it out.
+
+    The sampler runs on emcee's in-memory backend: an ``HDFBackend`` during sampling opens the file
+    and writes at every step, which took a fifth of a run.  Here the group is made by the backend's
+    own ``reset``/``grow`` and its datasets filled in one write each, so :func:`open_chain` (emcee's
+    reader) reads it back.  ``None`` when h5py is missing.
+    """
     try:
         import h5py  # noqa: F401, PLC0415 - emcee's HDF5 backend needs it
     except ImportError:
-        return None, None
+        return None
+    mem = sampler.backend
     backend = emcee.backends.HDFBackend(str(path), name=group)
-    with backend.open("a") as f:  # a fresh run overwrites an older group of the same name
-        if group in f:
-            del f[group]
-    return backend, group
+    backend.reset(mem.nwalkers, mem.ndim)  # a fresh run replaces an older group of the same name
+    backend.grow(mem.iteration, None)
+    with backend.open("a") as f:
+        g = f[group]
+        g["chain"][...] = mem.get_chain()
+        g["log_prob"][...] = mem.get_log_prob()
+        g["accepted"][...] = mem.accepted
+        for i, v in enumerate(mem.random_state or ()):
+            g.attrs[f"random_state_{i}"] = v
+        g.attrs["iteration"] = mem.iteration
+        g.attrs.update(attrs)
+    return group
 
 
 def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarray,
@@ -320,11 +335,10 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     cov0 = np.atleast_2d(np.asarray(cov0, float))
     sd0 = np.sqrt(np.clip(np.diag(cov0), 1e-16, None))
     first = StudentT(np.asarray(theta0, float), cov0 * 4.0 * 3.0 / 5.0 + 1e-14 * np.eye(ndim), 5.0)
-    samplers, moves, groups, states = [], [], [], []
+    samplers, moves, states = [], [], []
     for k, s in enumerate(seeds):
         move = IndependenceMove(first)
-        backend, name = _backend(path, f"{group}/ensemble_{k}")
-        sampler = emcee.EnsembleSampler(n_walkers, ndim, fn, pool=pmap, backend=backend,
+        sampler = emcee.EnsembleSampler(n_walkers, ndim, fn, pool=pmap,
                                         moves=[(move, INDEPENDENCE_SHARE),
                                                (emcee.moves.DEMove(), 1.0 - INDEPENDENCE_SHARE)])
         sampler.random_state = np.random.RandomState(s).get_state()
@@ -334,8 +348,6 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
         lp = np.array([target(p) for p in p0])
         p0[~np.isfinite(lp)] = theta0
         samplers.append(sampler), moves.append(move), states.append(p0)
-        if name:
-            groups.append(name)
     show = sys.stderr.isatty() if progress is None else progress
     bar = None
     if show:
@@ -374,12 +386,10 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     tau_max = float(np.nanmax(tau)) if np.isfinite(tau).any() else float(steps)
     burn = min(tune_steps + int(math.ceil(2.0 * tau_max)), chain.shape[1] - 1)
     thin = max(1, int(np.nanmin(tau) // 2)) if np.isfinite(tau).any() else 1
-    for smp in samplers:
-        if isinstance(smp.backend, emcee.backends.HDFBackend):
-            with smp.backend.open("a") as f:
-                g = f[smp.backend.name]
-                g.attrs.update({"adhfit_burn": burn, "adhfit_thin": thin, "adhfit_tune_steps": tune_steps,
-                                "adhfit_parameters": ",".join(target.names)})
+    attrs = {"adhfit_burn": burn, "adhfit_thin": thin, "adhfit_tune_steps": tune_steps,
+             "adhfit_parameters": ",".join(target.names)}
+    groups = [] if path is None else [
+        name for k, smp in enumerate(samplers) if (name := _save(path, f"{group}/ensemble_{k}", smp, attrs))]
     return Chains(chain=chain, log_prob=log_prob, burn=burn, thin=thin, tune_steps=tune_steps, tau=tau,
                   tau_history=history, acceptance=acceptance, converged=done, cap_hit=not done, seeds=seeds,
                   n_evaluations=pmap.n_evaluations - evals0, wall_time=time.perf_counter() - t0, groups=groups)
