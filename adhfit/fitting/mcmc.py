@@ -37,6 +37,7 @@ on ``workers`` processes (fork) when more than one is asked for; results do not 
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing
 import os
@@ -51,7 +52,8 @@ import numpy as np
 from .evidence import StudentT
 from .posterior import Target
 
-__all__ = ["Chains", "IndependenceMove", "sample_posterior", "open_chain", "ParallelMap", "default_workers",
+__all__ = ["Chains", "IndependenceMove", "sample_posterior", "save_chains", "open_chain", "ParallelMap",
+           "default_workers",
            "N_TAU", "TAU_RTOL"]
 
 N_TAU = 50.0
@@ -178,6 +180,10 @@ class Chains:
         Seconds.
     groups : list of str
         HDF5 groups of the ensembles (empty when not saved).
+    accepted_counts : ndarray, shape (n_ensembles, n_walkers)
+        Accepted proposals over the whole run, tuning included (emcee's ``accepted``).
+    random_states : list
+        Each ensemble's final emcee random state (written with the chain, to resume it).
     """
 
     chain: np.ndarray
@@ -194,6 +200,8 @@ class Chains:
     n_evaluations: int
     wall_time: float
     groups: list = field(default_factory=list)
+    accepted_counts: np.ndarray | None = None
+    random_states: list = field(default_factory=list)
 
     @property
     def kept(self) -> np.ndarray:
@@ -221,7 +229,8 @@ def open_chain(path, group: str):
     return emcee.backends.HDFBackend(str(path), name=group, read_only=True)
 
 
-def _save(path, group: str, sampler, attrs: dict) -> str | None:
+def _save(path, group: str, chain: np.ndarray, log_prob: np.ndarray, accepted: np.ndarray,
+          random_state, attrs: dict) -> str | None:
     """Write one ensemble's whole run to ``path`` once, as emcee's ``HDFBackend`` lays it out.
 
     The sampler runs on emcee's in-memory backend: an ``HDFBackend`` during sampling opens the file
@@ -233,20 +242,36 @@ def _save(path, group: str, sampler, attrs: dict) -> str | None:
         import h5py  # noqa: F401, PLC0415 - emcee's HDF5 backend needs it
     except ImportError:
         return None
-    mem = sampler.backend
+    n_steps, n_walkers, ndim = chain.shape
     backend = emcee.backends.HDFBackend(str(path), name=group)
-    backend.reset(mem.nwalkers, mem.ndim)  # a fresh run replaces an older group of the same name
-    backend.grow(mem.iteration, None)
+    backend.reset(n_walkers, ndim)  # a fresh run replaces an older group of the same name
+    backend.grow(n_steps, None)
     with backend.open("a") as f:
         g = f[group]
-        g["chain"][...] = mem.get_chain()
-        g["log_prob"][...] = mem.get_log_prob()
-        g["accepted"][...] = mem.accepted
-        for i, v in enumerate(mem.random_state or ()):
+        g["chain"][...] = chain
+        g["log_prob"][...] = log_prob
+        g["accepted"][...] = accepted
+        for i, v in enumerate(random_state or ()):
             g.attrs[f"random_state_{i}"] = v
-        g.attrs["iteration"] = mem.iteration
+        g.attrs["iteration"] = n_steps
         g.attrs.update(attrs)
     return group
+
+
+def save_chains(path, group: str, chains: Chains, names) -> list[str]:
+    """Write every ensemble of ``chains`` to HDF5 file ``path``, group ``"<group>/ensemble_<k>"``
+    (emcee's ``HDFBackend`` layout, with the run's burn-in, thinning and parameter names as
+    attributes); returns the groups written (none without h5py)."""
+    attrs = {"adhfit_burn": chains.burn, "adhfit_thin": chains.thin, "adhfit_tune_steps": chains.tune_steps,
+             "adhfit_parameters": ",".join(names)}
+    written = []
+    for k in range(chains.chain.shape[0]):
+        state = chains.random_states[k] if k < len(chains.random_states) else None
+        name = _save(path, f"{group}/ensemble_{k}", chains.chain[k], chains.log_prob[k],
+                     chains.accepted_counts[k], state, attrs)
+        if name:
+            written.append(name)
+    return written
 
 
 def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarray,
@@ -386,10 +411,11 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     tau_max = float(np.nanmax(tau)) if np.isfinite(tau).any() else float(steps)
     burn = min(tune_steps + int(math.ceil(2.0 * tau_max)), chain.shape[1] - 1)
     thin = max(1, int(np.nanmin(tau) // 2)) if np.isfinite(tau).any() else 1
-    attrs = {"adhfit_burn": burn, "adhfit_thin": thin, "adhfit_tune_steps": tune_steps,
-             "adhfit_parameters": ",".join(target.names)}
-    groups = [] if path is None else [
-        name for k, smp in enumerate(samplers) if (name := _save(path, f"{group}/ensemble_{k}", smp, attrs))]
-    return Chains(chain=chain, log_prob=log_prob, burn=burn, thin=thin, tune_steps=tune_steps, tau=tau,
-                  tau_history=history, acceptance=acceptance, converged=done, cap_hit=not done, seeds=seeds,
-                  n_evaluations=pmap.n_evaluations - evals0, wall_time=time.perf_counter() - t0, groups=groups)
+    out = Chains(chain=chain, log_prob=log_prob, burn=burn, thin=thin, tune_steps=tune_steps, tau=tau,
+                 tau_history=history, acceptance=acceptance, converged=done, cap_hit=not done, seeds=seeds,
+                 n_evaluations=pmap.n_evaluations - evals0, wall_time=time.perf_counter() - t0,
+                 accepted_counts=np.stack([smp.backend.accepted for smp in samplers]),
+                 random_states=[smp.random_state for smp in samplers])
+    if path is None:
+        return out
+    return dataclasses.replace(out, groups=save_chains(path, group, out, target.names))

@@ -26,7 +26,7 @@ from .diagnostics import diagnose
 from .evidence import StudentT, importance_evidence, model_probabilities
 from .fit import _check_options, _inputs, _provenance, _segments
 from .lsq import fit_slip
-from .mcmc import ParallelMap, default_workers, sample_posterior
+from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
 from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
 from .posterior import Target, default_priors
 from .result import Estimate, FitResult, clean
@@ -176,6 +176,56 @@ def _verdict(probs: dict, lsq_verdict: dict) -> dict:
                            "with ln B lowered by 2 Monte-Carlo standard errors"}}
 
 
+@dataclasses.dataclass
+class _SlipJob:
+    """Sampling one slip condition's posterior and its evidence (runs in a process of its own)."""
+
+    target: Target
+    raw: object
+    seed: np.random.SeedSequence
+    cfg: dict
+    progress: bool | None
+
+    def __call__(self) -> dict:
+        tg, raw, cfg = self.target, self.raw, self.cfg
+        theta0 = tg.from_si(raw.par.si(raw.best.params))
+        cov0 = raw.best.covar if raw.best.covar is not None else np.diag((0.05 * np.ones(tg.ndim)) ** 2)
+        ss_run, ss_ev = self.seed.spawn(2)
+        with ParallelMap(1) as pmap:
+            chains = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
+                                      n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
+                                      tune_steps=cfg["tune_steps"], check_every=cfg["check_every"],
+                                      max_steps=cfg["max_steps"], group=raw.model.slip, pmap=pmap,
+                                      progress=self.progress)
+            flat = chains.flat
+            evidence = importance_evidence(tg.log_prior, lambda th: np.array(pmap.map(tg.log_likelihood, list(th))),
+                                           StudentT.fit(flat, df=5.0, inflate=1.2), cfg["evidence_draws"],
+                                           np.random.default_rng(ss_ev))
+            return {"chains": chains, "diagnostics": diagnose(chains, tg.names), "samples": tg.to_si(flat),
+                    "evidence": evidence, "evaluations": pmap.n_evaluations}
+
+
+_JOBS: list = []  # read by forked workers (see _run_jobs)
+
+
+def _run_job(i: int) -> dict:
+    return _JOBS[i]()
+
+
+def _run_jobs(jobs: list, processes: int) -> list[dict]:
+    """Run ``jobs`` (callables), in ``processes`` forked processes when more than one (the jobs and
+    everything they hold are inherited, only the results travel back)."""
+    import multiprocessing  # noqa: PLC0415
+    if processes < 2 or len(jobs) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        return [job() for job in jobs]
+    _JOBS[:] = jobs
+    try:
+        with multiprocessing.get_context("fork").Pool(processes) as pool:
+            return pool.map(_run_job, range(len(jobs)), chunksize=1)
+    finally:
+        _JOBS.clear()
+
+
 def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
                    fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
                    points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
@@ -192,7 +242,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     outdir : path, optional
         Where ``chain.h5`` is written (one group per slip condition; not written when None).
     workers : int, optional
-        Processes for likelihood evaluations (default: up to 2).  Results do not depend on it.
+        Processes: with both slip conditions, each is sampled in its own process when this is 2 or
+        more (default: up to 2, the usable cores).  Results do not depend on it.
     progress : bool, optional
         tqdm bar on standard error (default: only on a terminal).
     membrane : {"auto", "large-stretch", "exact"}, optional
@@ -240,25 +291,18 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         path = Path(outdir) / "chain.h5"
         path.parent.mkdir(parents=True, exist_ok=True)
     seeds = dict(zip(slips, root.spawn(len(slips))))
-    chains, evid, diags, samples = {}, {}, {}, {}
-    with ParallelMap(default_workers() if workers is None else workers) as pmap:
-        for s, tg in targets.items():
-            raw = raws[s]
-            theta0 = tg.from_si(raw.par.si(raw.best.params))
-            cov0 = raw.best.covar if raw.best.covar is not None else np.diag((0.05 * np.ones(tg.ndim)) ** 2)
-            ss_run, ss_ev = seeds[s].spawn(2)
-            chains[s] = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
-                                         n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
-                                         tune_steps=cfg["tune_steps"], check_every=cfg["check_every"],
-                                         max_steps=cfg["max_steps"], path=path, group=s, pmap=pmap,
-                                         progress=progress)
-            diags[s] = diagnose(chains[s], tg.names)
-            flat = chains[s].flat
-            samples[s] = tg.to_si(flat)
-            ll = pmap.register(tg.log_likelihood)
-            evid[s] = importance_evidence(tg.log_prior, lambda th, ll=ll: np.array(pmap.map(ll, list(th))),
-                                          StudentT.fit(flat, df=5.0, inflate=1.2), cfg["evidence_draws"],
-                                          np.random.default_rng(ss_ev))
+    jobs = {s: _SlipJob(targets[s], raws[s], seeds[s], cfg, progress) for s in slips}
+    n_proc = min(len(slips), default_workers() if workers is None else int(workers))
+    runs = dict(zip(slips, _run_jobs([jobs[s] for s in slips], n_proc)))
+    chains = {s: r["chains"] for s, r in runs.items()}
+    diags = {s: r["diagnostics"] for s, r in runs.items()}
+    samples = {s: r["samples"] for s, r in runs.items()}
+    evid = {s: r["evidence"] for s, r in runs.items()}
+    if path is not None:
+        chains = {s: dataclasses.replace(c, groups=save_chains(path, s, c, targets[s].names))
+                  for s, c in chains.items()}
+    with ParallelMap(1) as pmap:
+        pmap.n_evaluations = sum(r["evaluations"] for r in runs.values())
         probs = model_probabilities(evid)
         verdict = _verdict(probs, lsq_verdict)
         rng = np.random.default_rng(root.spawn(len(slips) + 1)[-1])
@@ -299,7 +343,7 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     summary = {
         "seed": seed, "noise_model": targets[rep].noise_model, "converged": converged,
         "priors": {k: p.as_dict() for k, p in zip(targets[rep].names, targets[rep].priors)},
-        "settings": cfg | {"workers": default_workers() if workers is None else workers},
+        "settings": cfg | {"workers": n_proc},
         "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a tuned Student-t "
                    "(90 %) + differential evolution (10 %); see adhfit.fitting.mcmc",
         "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap",
