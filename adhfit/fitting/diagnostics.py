@@ -22,7 +22,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["diagnose", "RHAT_MAX", "N_OVER_TAU_MIN", "ACCEPTANCE_RANGE", "ESS_MIN"]
+__all__ = ["diagnose", "preload", "RHAT_MAX", "N_OVER_TAU_MIN", "ACCEPTANCE_RANGE", "ESS_MIN"]
 
 RHAT_MAX = 1.01
 N_OVER_TAU_MIN = 50.0
@@ -31,6 +31,11 @@ STUCK_WALKER = 0.05
 #: τ (steps) above which high acceptance means small steps (the independence move gives τ ≈ 1-3)
 LONG_TAU = 5.0
 ESS_MIN = 400.0
+
+
+def preload() -> None:
+    """Import arviz now (1-3 s), e.g. in a thread while the sampler runs in other processes."""
+    _arviz()
 
 
 def _arviz():

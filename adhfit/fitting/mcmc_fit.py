@@ -201,8 +201,8 @@ class _SlipJob:
             evidence = importance_evidence(tg.log_prior, lambda th: np.array(pmap.map(tg.log_likelihood, list(th))),
                                            StudentT.fit(flat, df=5.0, inflate=1.2), cfg["evidence_draws"],
                                            np.random.default_rng(ss_ev))
-            return {"chains": chains, "diagnostics": diagnose(chains, tg.names), "samples": tg.to_si(flat),
-                    "evidence": evidence, "evaluations": pmap.n_evaluations}
+            return {"chains": chains, "samples": tg.to_si(flat), "evidence": evidence,
+                    "evaluations": pmap.n_evaluations}
 
 
 _JOBS: list = []  # read by forked workers (see _run_jobs)
@@ -219,6 +219,10 @@ def _run_jobs(jobs: list, processes: int) -> list[dict]:
     if processes < 2 or len(jobs) < 2 or "fork" not in multiprocessing.get_all_start_methods():
         return [job() for job in jobs]
     _JOBS[:] = jobs
+    import threading  # noqa: PLC0415
+    from .diagnostics import preload  # noqa: PLC0415
+    # the parent only waits while the jobs run: it loads the diagnostics' library (arviz, 1-3 s) meanwhile
+    threading.Thread(target=preload, daemon=True).start()
     try:
         with multiprocessing.get_context("fork").Pool(processes) as pool:
             return pool.map(_run_job, range(len(jobs)), chunksize=1)
@@ -295,7 +299,7 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     n_proc = min(len(slips), default_workers() if workers is None else int(workers))
     runs = dict(zip(slips, _run_jobs([jobs[s] for s in slips], n_proc)))
     chains = {s: r["chains"] for s, r in runs.items()}
-    diags = {s: r["diagnostics"] for s, r in runs.items()}
+    diags = {s: diagnose(chains[s], targets[s].names) for s in slips}
     samples = {s: r["samples"] for s, r in runs.items()}
     evid = {s: r["evidence"] for s, r in runs.items()}
     if path is not None:
