@@ -27,8 +27,9 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataError, InputError
+from .readers import detect_layout
 from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, assign, check_overrides, split_cell
-from .readers.text import Layout, detect_layout, read_lines, split_line
+from .readers.text import Layout, read_lines, split_line
 
 __all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
 

@@ -1,4 +1,4 @@
-"""``adhfit fit`` over several curves (adhfit.fitting.batch): which files, which scene, the summary
+"""``adhfit fit`` over several curves (adhfit.cli.batch): which files, which scene, the summary
 table, and a bad file that is reported, never fatal."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from adhfit.cli import main
-from adhfit.fitting import batch
+from adhfit.cli import batch
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_data"
 GOOD = SAMPLES / "fea_displacement_no-slip"

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from adhfit.cli import main
-from adhfit.fitting import batch
+from adhfit.cli import batch
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_data"
 CURVES = ("fea_displacement_no-slip", "flat_displacement_no-slip", "fea_pressure_no-slip")

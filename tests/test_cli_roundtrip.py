@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from adhfit import cli_engine
+from adhfit.cli import engine as cli_engine
 from adhfit.cli import main
 
 SCENE = """\

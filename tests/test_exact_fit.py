@@ -64,7 +64,7 @@ def test_scene_membrane_model_key(tmp_path):
 
 
 def test_cli_membrane_option():
-    from adhfit.cli import _build_parser
+    from adhfit.cli.main import _build_parser
     args = _build_parser().parse_args(["fit", "data.csv", "--membrane", "exact"])
     assert args.membrane == "exact"
     assert _build_parser().parse_args(["fit", "data.csv"]).membrane is None  # the scene's then

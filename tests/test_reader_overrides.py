@@ -204,8 +204,8 @@ def test_cli_ambiguous_file_one_line(tmp_path, capsys):
 
 
 def test_cli_flags_parse():
-    from adhfit.cli import _build_parser  # noqa: PLC0415
-    from adhfit.fitting.cli_support import read_options  # noqa: PLC0415
+    from adhfit.cli.main import _build_parser  # noqa: PLC0415
+    from adhfit.cli.arguments import read_options  # noqa: PLC0415
     args = _build_parser().parse_args(["fit", "x.csv", "--columns", "force=Load 2, displacement=Position",
                                        "--units", "displacement=mm,force=N", "--force-sign", "tensile-positive"])
     assert read_options(args) == {"columns": {"force": "Load 2", "displacement": "Position"},

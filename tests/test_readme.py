@@ -39,7 +39,7 @@ def test_ci_runs_the_readme_test_command_verbatim():
 def test_no_pointer_outside_the_repository():
     texts = {"README.md": README, "sample_data/README.md": (ROOT / "sample_data" / "README.md").read_text()}
     texts.update({str(p.relative_to(ROOT)): p.read_text(encoding="utf-8") for p in (ROOT / "docs").glob("*.md")})
-    from adhfit.cli import _build_parser
+    from adhfit.cli.main import _build_parser
     parser = _build_parser()
     texts["adhfit --help"] = parser.format_help()
     for action in parser._subparsers._group_actions:  # noqa: SLF001 - the sub-commands' --help
@@ -100,7 +100,7 @@ def test_bash_blocks_parse():
     """CI variant of the next test: every `adhfit` line of the later bash blocks is accepted by the parser
     (a renamed or removed option fails here without running the fits)."""
     import shlex
-    from adhfit.cli import _build_parser
+    from adhfit.cli.main import _build_parser
     lines = [ln for block in _later_bash() for ln in block.splitlines() if ln.startswith("adhfit ")]
     assert len(lines) >= 4
     parser = _build_parser()

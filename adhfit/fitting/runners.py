@@ -1,7 +1,7 @@
 """Where the jobs of a batch run (docs/contracts.md A7): local worker processes, or a Dask distributed cluster.
 
 Generic: a job is a call ``fn(*call)`` of a module-level function with picklable arguments that returns
-its own result and never raises for a bad input (see :func:`adhfit.fitting.batch.run_job`).  Results are
+its own result and never raises for a bad input (see :func:`adhfit.cli.batch.run_job`).  Results are
 handed to ``report`` as they finish; the caller puts them back in job order.  A job whose process dies
 (a crash, not an error) or whose task is lost is handed to ``crashed(index, message)`` instead, and the
 other jobs go on.
@@ -19,12 +19,6 @@ __all__ = ["default_workers", "run_local", "run_dask"]
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
 
-#: modules a local worker needs, imported once by the fork server (where the workers are not forked
-#: from this process)
-PRELOAD = ["adhfit.fitting.cli_support", "adhfit.fitting.fit", "adhfit.data", "adhfit.scene",
-           "adhfit.report.json_report", "adhfit.report.markdown", "adhfit.report.html",
-           "adhfit.report.fit_plot", "matplotlib"]
-
 Report = Callable[[Any], None]
 Crashed = Callable[[int, str], Any]
 
@@ -40,17 +34,17 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _context():
+def _context(preload: Sequence[str] = ()):
     """Linux: fork this process (it has imported half of what a fit needs; a separate server would import
     it all again, 1-2 s on the critical path).  Elsewhere (fork is unsafe on macOS, absent on Windows):
-    a fork server that imports the fit and the reports once, else spawn."""
+    a fork server that imports the modules ``preload`` names once, else spawn."""
     import multiprocessing  # noqa: PLC0415
     methods = multiprocessing.get_all_start_methods()
     if sys.platform.startswith("linux") and "fork" in methods:
         return multiprocessing.get_context("fork")
     if "forkserver" in methods:
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(PRELOAD)  # a module that is not there is skipped by the server
+        ctx.set_forkserver_preload(list(preload))  # a module that is not there is skipped by the server
         return ctx
     return multiprocessing.get_context("spawn")
 
@@ -74,13 +68,15 @@ def _pass(fn: Callable, calls: Sequence[tuple], indices: list[int], workers: int
     return sorted(broken)
 
 
-def run_local(fn: Callable, calls: Sequence[tuple], workers: int, report: Report, crashed: Crashed) -> None:
+def run_local(fn: Callable, calls: Sequence[tuple], workers: int, report: Report, crashed: Crashed,
+              preload: Sequence[str] = ()) -> None:
     """Run ``fn(*call)`` for every call in ``workers`` local processes.
 
     A worker process that dies breaks its pool: the jobs it took down are run again one by one, each in
-    a fresh process, so that only the job that crashes is reported to ``crashed``.
+    a fresh process, so that only the job that crashes is reported to ``crashed``.  ``preload``: modules
+    a fork server imports once, where processes are not forked from this one (not on Linux).
     """
-    ctx = _context()
+    ctx = _context(preload)
     for i in _pass(fn, calls, list(range(len(calls))), workers, report, crashed, ctx):
         if _pass(fn, calls, [i], 1, report, crashed, ctx):
             report(crashed(i, "the worker process died while running this job"))

@@ -8,6 +8,14 @@ raises one-line errors for what stays ambiguous.  :func:`adhfit.data.read_curve`
 from __future__ import annotations
 
 from .columns import ALIASES, Assignment, assign
-from .text import Layout, detect_layout, read_lines
+from .lvm import lvm_layout
+from .text import Layout, is_lvm, read_lines, text_layout
+
+
+def detect_layout(lines: list[str], where: str, *, lvm: bool = False) -> Layout:
+    """Find the layout of a curve file's lines: LabVIEW ``.lvm`` (when ``lvm``, or recognised from its
+    first line, :mod:`.lvm`) or delimited text (:mod:`.text`)."""
+    return lvm_layout(lines, where) if lvm or is_lvm(lines) else text_layout(lines, where)
+
 
 __all__ = ["ALIASES", "Assignment", "Layout", "assign", "detect_layout", "read_lines"]

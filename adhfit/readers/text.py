@@ -6,8 +6,8 @@ counted, and the reading that makes the most lines numeric wins (ties: decimal p
 ``;`` tab).  ``csv.Sniffer`` is not used for this: on ``0;1,5`` it prefers ``,``, the wrong answer
 for a European Excel file.  The header is the nearest non-numeric line above the first numeric
 one; a line between them without any known column name is a units row.  Everything above the
-header is metadata, reported with its line number.  LabVIEW ``.lvm`` files are handed to
-:mod:`.lvm`.
+header is metadata, reported with its line number.  LabVIEW ``.lvm`` files are read by :mod:`.lvm`
+(:func:`adhfit.readers.detect_layout` chooses).
 """
 from __future__ import annotations
 
@@ -131,12 +131,14 @@ def _sniff(lines: list[str]) -> tuple[str, str, int]:
     return best[1], best[2], best[3]
 
 
-def detect_layout(lines: list[str], where: str, *, lvm: bool = False) -> Layout:
-    """Find the layout of a curve file's lines (LabVIEW ``.lvm`` when ``lvm`` or recognised)."""
+def is_lvm(lines: list[str]) -> bool:
+    """Whether the lines are a LabVIEW measurement file (its first line says so)."""
     first = next((line for line in lines if line.strip()), "")
-    if lvm or first.strip().lower().startswith("labview measurement"):
-        from .lvm import lvm_layout  # noqa: PLC0415
-        return lvm_layout(lines, where)
+    return first.strip().lower().startswith("labview measurement")
+
+
+def text_layout(lines: list[str], where: str) -> Layout:
+    """Find the layout of a delimited-text curve file's lines (module docstring)."""
     sep, decimal, width = _sniff(lines[:_SNIFF_LINES])
     header_no, units_no = _find_header(lines, sep, decimal, width, where)
     layout = Layout(sep=sep, decimal=decimal, header_no=header_no, units_no=units_no)

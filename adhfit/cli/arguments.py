@@ -1,24 +1,20 @@
-"""``adhfit fit`` (docs/contracts.md A5): the argument parser and the run function the CLI calls.
+"""``adhfit fit``'s options (docs/contracts.md A5, A4b, A7): the parser and what the options mean.
 
-Thin: parse, call :func:`adhfit.fitting.fit.fit_curve`, write ``report.json``, ``report.md`` and
-``fit.png`` into the output directory, print a short summary.  Invalid input raises
-:class:`~adhfit.errors.InputError` / :class:`~adhfit.errors.DataError`, which the CLI turns into one
-line on standard error and exit status 2.
+Parsing only: nothing here reads a file or runs a fit.  Invalid values end with argparse's one-line
+error (exit status 2, see :mod:`.main`) or an :class:`~adhfit.errors.InputError` naming the flag.
 """
 from __future__ import annotations
 
 import argparse
-import os
-import sys
 from pathlib import Path
 
 from ..errors import InputError
-from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
+from ..fitting.options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
 
 #: ``--membrane`` choices (adhfit.scene.MEMBRANE_MODELS; repeated here to keep the parser's imports light)
 MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
 
-__all__ = ["add_fit_arguments", "read_options", "run_fit", "check_output_dir", "start_engine", "write_reports"]
+__all__ = ["add_fit_arguments", "read_options", "fit_x_offset", "fit_force_offset", "MEMBRANE_CHOICES"]
 
 
 def _seed(text: str) -> int:
@@ -128,11 +124,10 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
                    help="with --global: contact-radius noise, e.g. '2 um' (default: estimated per curve)")
     p.add_argument("--no-contact-radius", action="store_true",
                    help="with --global: do not fit the contact_radius column")
-    p.set_defaults(run=run_fit)
     return p
 
 
-def _x_offset(args, control: str) -> bool:
+def fit_x_offset(args, control: str) -> bool:
     if args.no_offset and args.pressure_offset:
         raise InputError("--no-offset", True, "absent when --pressure-offset is given")
     if control == "displacement":
@@ -142,120 +137,7 @@ def _x_offset(args, control: str) -> bool:
     return bool(args.pressure_offset)
 
 
-def check_output_dir(path: Path) -> Path:
-    """Make sure ``path`` can hold the reports *before* any work, without creating it yet.
-
-    Raises
-    ------
-    InputError
-        ``path`` is an existing file, lies under a file, or its nearest existing folder is not writable.
-    """
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise InputError("-o/--output", str(path), "a folder (it is an existing file)",
-                         "Give another name, or remove the file.")
-    parent = next((q for q in [path, *path.parents] if q.exists()), Path("."))
-    if not parent.is_dir():
-        raise InputError("-o/--output", str(path), "a folder path", f"{parent} is a file, not a folder.")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError("-o/--output", str(path), "a folder you can write to",
-                         f"{parent} is not writable; choose another folder, or change its permissions.")
-    return path
-
-
-def start_engine(control: str, *, quiet: bool = False) -> float:
-    """Compile or load the engine before a fit starts its clock; returns the seconds it took.
-
-    On a cold numba cache, prints the one-line notice on standard error first (not with ``quiet``).
-    """
-    from ..cli_engine import COMPILING_NOTICE, engine_cache_is_cold, warm_up  # noqa: PLC0415
-    if not quiet and engine_cache_is_cold():
-        print(COMPILING_NOTICE, file=sys.stderr, flush=True)
-    return warm_up(control)
-
-
-def _force_offset(args) -> bool:
+def fit_force_offset(args) -> bool:
     if args.no_force_offset and args.force_offset:
         raise InputError("--no-force-offset", True, "absent when --force-offset is given")
     return not args.no_force_offset
-
-
-def run_fit(args) -> int:
-    """Run ``adhfit fit`` from parsed arguments; returns the exit status."""
-    if getattr(args, "global_fit", False):  # several curves, one fit: never the batch path
-        from .global_cli import run_global  # noqa: PLC0415
-        return run_global(args)
-    from . import batch  # noqa: PLC0415
-    if isinstance(args.data, list):  # the command line gives a list: a batch, or one curve
-        if batch.is_batch(args.data):  # before the heavy imports: the workers may do all the fitting
-            if args.output is not None:
-                check_output_dir(args.output)
-            return batch.run_batch(args, run_fit)
-        args.data = args.data[0]
-    from ..data import read_curve  # noqa: PLC0415
-    from ..scene import load_scene  # noqa: PLC0415
-    from ..units import parse_quantity  # noqa: PLC0415
-    from .fit import fit_curve  # noqa: PLC0415
-    if args.scene is None:
-        args.scene = batch.single_scene(args.data)
-    out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")
-    check_output_dir(out)
-    if args.method == "mcmc":
-        from .mcmc_cli import run_fit_mcmc  # noqa: PLC0415
-        return run_fit_mcmc(args)
-    sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
-    scene = load_scene(args.scene)
-    curve = read_curve(args.data, scene.control, **read_options(args))
-    quiet = getattr(args, "quiet", False)
-    startup = start_engine(scene.control, quiet=quiet)
-    from ..cli_engine import elapsed  # noqa: PLC0415
-    with elapsed(f"fitting {Path(args.data).name}", enabled=False if quiet else None):
-        result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
-                           fit_x_offset=_x_offset(args, scene.control), fit_force_offset=_force_offset(args),
-                           seed=args.seed, points=args.points, profile=not args.no_profile,
-                           membrane=getattr(args, "membrane", None))
-    write_reports(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
-    print(_summary(result, out))
-    return 0
-
-
-def write_reports(result, out: Path, *, plot: bool = True, images: dict | None = None,
-                  extra: dict | None = None) -> None:
-    """Write report.json, report.md, report.html, plot_data.json (data and fitted curve, for a batch's
-    summary.html) and (``plot``) fit.png of one fit into ``out``."""
-    from ..report.fit_plot import plot_fit  # noqa: PLC0415
-    from ..report.html import write_html  # noqa: PLC0415
-    from ..report.json_report import write_json  # noqa: PLC0415
-    from ..report.markdown import write_markdown  # noqa: PLC0415
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(result, out / "report.json", extra=extra)
-    write_markdown(result, out / "report.md")
-    from ..report.summary_html import write_plot_data  # noqa: PLC0415
-    write_plot_data(result, out / "plot_data.json")
-    figures = dict(images or {})
-    if plot:
-        plot_fit(result, path=out / "fit.png")
-        figures = {"fit.png": out / "fit.png", **figures}
-    write_html(result, out / "report.html", images=figures, extra=extra)
-
-
-def _fmt_estimate(name: str, e) -> str:
-    """One line per estimate, honest about one-sided and undetermined parameters."""
-    d = e if isinstance(e, dict) else e.as_dict()
-    from ..report.text import estimate_text  # noqa: PLC0415
-    return f"{name} = {estimate_text(name, d)}"
-
-
-def _summary(result, out: Path) -> str:
-    d = result.as_dict()
-    lines = [f"slip: {d['slip'].get('verdict')}"]
-    if d.get("model"):
-        lines.append(f"membrane: {d['model']['membrane']} ({d['model']['why']})")
-    shown = dict(d.get("parameters", {}))
-    for name, e in shown.items():
-        lines.append(_fmt_estimate(name, e))
-    n_warn = len(d.get("warnings", []) or [])
-    lines.append(f"{n_warn} warning(s); {d.get('model_evaluations')} model evaluations, "
-                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, report.html"
-                 + ("" if not (out / "fit.png").exists() else ", fit.png"))
-    return "\n".join(lines)

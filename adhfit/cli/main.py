@@ -1,4 +1,5 @@
-"""Command line: ``adhfit simulate`` (docs/contracts.md A2) and ``adhfit fit`` (A5).
+"""The entry point: the parser, ``adhfit simulate`` (docs/contracts.md A2) and the sub-command ``fit``
+(A5, :mod:`.fit`).
 
 Thin: parse, call the library, write files. Invalid input ends with exit status 2 and one line on
 standard error that names the parameter, its value and the valid range; never a traceback.
@@ -11,8 +12,8 @@ import math
 import sys
 from pathlib import Path
 
-from .errors import AdhfitError, ConvergenceError
-from .params import DIMENSIONLESS
+from ..errors import AdhfitError, ConvergenceError
+from ..params import DIMENSIONLESS
 
 __all__ = ["main"]
 
@@ -127,12 +128,13 @@ def _simulate_parser(sub) -> None:
 
 
 def _fit_parser(sub) -> None:
-    from .fitting.cli_support import add_fit_arguments  # noqa: PLC0415 - keeps simulate light
-    add_fit_arguments(sub)
+    from .arguments import add_fit_arguments  # noqa: PLC0415 - keeps simulate light
+    from .fit import run_fit  # noqa: PLC0415
+    add_fit_arguments(sub).set_defaults(run=run_fit)
 
 
 def _run_simulate(args) -> int:
-    from .simulation import simulate  # noqa: PLC0415
+    from ..simulation import simulate  # noqa: PLC0415
     if args.scene is not None:
         kwargs, scene = _scene_kwargs(args)
     else:
@@ -160,7 +162,7 @@ def _run_simulate(args) -> int:
         else:
             _write_csv(result.frame, args.output)
     if args.plot is not None:
-        from .report.plots import plot_history  # noqa: PLC0415
+        from ..report.plots import plot_history  # noqa: PLC0415
         plot_history(result, scene=None if scene is None else scene.scales(args.mu_h), path=args.plot)
     if args.json:
         print(json.dumps(result.summary, allow_nan=False))
@@ -168,11 +170,11 @@ def _run_simulate(args) -> int:
 
 
 def _scene_kwargs(args):
-    from .scene import load_scene  # noqa: PLC0415
+    from ..scene import load_scene  # noqa: PLC0415
     for name in ("control", "p", "d", "w", "rs", "lambda0"):
         if getattr(args, name) is not None:
             raise _Usage(f"adhfit simulate: --{name} cannot be combined with --scene (the scene sets it)")
-    from .fitting.measured import parse_end  # noqa: PLC0415
+    from ..fitting.measured import parse_end  # noqa: PLC0415
     scene = load_scene(args.scene)
     kwargs = scene.to_dimensionless(args.mu_h, args.work_of_adhesion, slip=args.slip)
     scales = scene.scales(args.mu_h)
@@ -190,7 +192,7 @@ def _scene_kwargs(args):
 
 def _write_measured(args, scene, result) -> None:
     """The measured-style CSV of a scene run (what a testing machine records; 'adhfit fit' reads it)."""
-    from .fitting.measured import loading_end_si, measured_frame  # noqa: PLC0415
+    from ..fitting.measured import loading_end_si, measured_frame  # noqa: PLC0415
     scales = scene.scales(args.mu_h)
     kw = result.inputs
     x_max = loading_end_si(result.frame, scene.control, scales)
@@ -209,7 +211,7 @@ def _write_csv(frame, path: Path) -> None:
 
 def _build_parser() -> _Parser:
     parser = _Parser(prog="adhfit", description="Adhesion tests with an inflated elastic membrane.")
-    from . import __version__  # noqa: PLC0415
+    from .. import __version__  # noqa: PLC0415
     parser.add_argument("--version", action="version", version=f"adhfit {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _simulate_parser(sub)
@@ -246,5 +248,4 @@ def main(argv: list[str] | None = None) -> int:
         return 1
 
 
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+

@@ -4,7 +4,7 @@ The numba kernels of :mod:`adhfit.core` are compiled on the first call in a new 
 (about a minute, longer on a busy machine) and loaded from numba's on-disk cache afterwards (about a
 second).  The CLI uses :func:`engine_cache_is_cold` to print a one-line notice before a cold start, and
 :func:`warm_up` to pay the one-off cost before a fit starts its clock, so that the wall time a report
-gives is the fit's own.  Nothing here prints: the CLI does.
+gives is the fit's own.  :func:`start_engine` prints the notice on standard error.
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["engine_cache_is_cold", "warm_up", "COMPILING_NOTICE", "elapsed"]
+__all__ = ["engine_cache_is_cold", "warm_up", "start_engine", "COMPILING_NOTICE", "elapsed"]
 
 COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
 
@@ -26,8 +26,8 @@ def _marker() -> Path:
     (:func:`adhfit.core.jit.core_hash`); :func:`warm_up` leaves this marker, named after the same
     hash, once they have been compiled or loaded.  Any edit of ``core/`` changes the name.
     """
-    from .core.jit import core_hash  # noqa: PLC0415
-    return Path(__file__).resolve().parent / "core" / "__pycache__" / f"engine-{core_hash()[:16]}.ready"
+    from ..core.jit import core_hash  # noqa: PLC0415
+    return Path(__file__).resolve().parent.parent / "core" / "__pycache__" / f"engine-{core_hash()[:16]}.ready"
 
 
 def engine_cache_is_cold() -> bool:
@@ -55,8 +55,8 @@ def warm_up(control: str = "displacement") -> float:
     float
         Seconds spent (compile or cache load).
     """
-    from .exact import exact_history  # noqa: PLC0415
-    from .simulation import simulate  # noqa: PLC0415
+    from ..exact import exact_history  # noqa: PLC0415
+    from ..simulation import simulate  # noqa: PLC0415
     t0 = time.perf_counter()
     fixed = {"p": 0.6} if control == "displacement" else {"d": 0.0}
     for slip in ("no-slip", "frictionless"):
@@ -102,3 +102,13 @@ def elapsed(desc: str, *, enabled: bool | None = None):
         stop.set()
         thread.join()
         bar.close()
+
+
+def start_engine(control: str, *, quiet: bool = False) -> float:
+    """Compile or load the engine before a fit starts its clock; returns the seconds it took.
+
+    On a cold numba cache, prints the one-line notice on standard error first (not with ``quiet``).
+    """
+    if not quiet and engine_cache_is_cold():
+        print(COMPILING_NOTICE, file=sys.stderr, flush=True)
+    return warm_up(control)

@@ -1,7 +1,7 @@
 """``adhfit fit FILE ... --global`` (docs/contracts.md A7): one fit of a test series.
 
 Thin: find the curves and each one's scene (``--scene``, else the nearest ``scene.toml``, as in a
-batch), call :func:`~.global_fit.fit_global`, write ``report.json`` (A5/A5b plus ``curves``),
+batch), call :func:`adhfit.fitting.global_fit.fit_global`, write ``report.json`` (A5/A5b plus ``curves``),
 ``report.md`` and ``fit.png`` (every curve with the shared fit and its residuals) into the output
 directory, print a short summary.
 """
@@ -35,8 +35,9 @@ def run_global(args) -> int:
     from ..report.series_plot import plot_series, write_series_markdown  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from .cli_support import _x_offset, check_output_dir, read_options  # noqa: PLC0415
-    from .global_fit import fit_global  # noqa: PLC0415
+    from ..fitting.global_fit import fit_global  # noqa: PLC0415
+    from .arguments import fit_x_offset, read_options  # noqa: PLC0415
+    from .writing import check_output_dir  # noqa: PLC0415
     if args.method != "lsq":
         raise InputError("--method", args.method, "lsq (a global MCMC fit is not available in this version)")
     out = check_output_dir(args.output if args.output is not None else Path("adhfit_global_fit"))
@@ -47,7 +48,7 @@ def run_global(args) -> int:
     sigma_a = None if getattr(args, "sigma_radius", None) is None else \
         parse_quantity(args.sigma_radius, "length", name="--sigma-radius")
     controls = {sc.control for sc in scenes}
-    fit_x = _x_offset(args, scenes[0].control) if len(controls) == 1 else None
+    fit_x = fit_x_offset(args, scenes[0].control) if len(controls) == 1 else None
     slips = {sc.slip for sc in scenes}
     slip = args.slip or (slips.pop() if len(slips) == 1 else "auto")
     result = fit_global(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_a,

@@ -49,6 +49,11 @@ from typing import Any, Callable, Iterable, Mapping
 
 from ..errors import AdhfitError, InputError
 
+#: modules a local worker needs, imported once by a fork server (where the workers are not forked from
+#: this process)
+PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.fit", "adhfit.data", "adhfit.scene", "adhfit.report.json_report",
+           "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot", "matplotlib")
+
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
            "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED"]
 
@@ -291,7 +296,7 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
 
     ``args.workers`` is ``None`` for one process per core; a Namespace without it runs in this process.
     """
-    from .runners import default_workers  # noqa: PLC0415
+    from ..fitting.runners import default_workers  # noqa: PLC0415
     address = getattr(args, "scheduler", None)
     workers = getattr(args, "workers", 1)
     if address is not None:
@@ -333,11 +338,11 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
         for call in calls:
             report(run_job(*call))
     else:
-        from . import runners  # noqa: PLC0415
+        from ..fitting import runners  # noqa: PLC0415
         def crashed(i: int, message: str) -> Outcome:
             return _failed(i, jobs[i], base, message, args)
         if kind == "local":
-            runners.run_local(run_job, calls, how, report, crashed)
+            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
         else:
             runners.run_dask(run_job, calls, how, report, crashed)
     rows = [outcomes[i].row for i in range(len(jobs))]

@@ -1,0 +1,13 @@
+"""The ``adhfit`` command line (docs/contracts.md A2, A5, A7).
+
+Thin: parse the arguments, call the library, write the files, print.  Only this package prints.
+
+Modules: :mod:`.main` (the parser, ``adhfit simulate``, the entry point and its one-line errors),
+:mod:`.arguments` (``adhfit fit``'s options), :mod:`.fit` (one curve by least squares, and the dispatch
+to the others), :mod:`.mcmc` (``--method mcmc``), :mod:`.batch` (several curves: local processes or a
+Dask cluster), :mod:`.writing` (the output folder and the reports of one fit), :mod:`.engine` (the
+first run's compile notice, the warm-up and the running clock).
+"""
+from .main import main
+
+__all__ = ["main"]

@@ -1,0 +1,73 @@
+"""The output folder and the reports of one fit: report.json, report.md, report.html, fit.png and the
+summary lines the command line prints."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ..errors import InputError
+
+__all__ = ["check_output_dir", "write_reports", "summary_text"]
+
+
+def check_output_dir(path: Path) -> Path:
+    """Make sure ``path`` can hold the reports *before* any work, without creating it yet.
+
+    Raises
+    ------
+    InputError
+        ``path`` is an existing file, lies under a file, or its nearest existing folder is not writable.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError("-o/--output", str(path), "a folder (it is an existing file)",
+                         "Give another name, or remove the file.")
+    parent = next((q for q in [path, *path.parents] if q.exists()), Path("."))
+    if not parent.is_dir():
+        raise InputError("-o/--output", str(path), "a folder path", f"{parent} is a file, not a folder.")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError("-o/--output", str(path), "a folder you can write to",
+                         f"{parent} is not writable; choose another folder, or change its permissions.")
+    return path
+
+
+def write_reports(result, out: Path, *, plot: bool = True, images: dict | None = None,
+                  extra: dict | None = None) -> None:
+    """Write report.json, report.md, report.html, plot_data.json (data and fitted curve, for a batch's
+    summary.html) and (``plot``) fit.png of one fit into ``out``."""
+    from ..report.fit_plot import plot_fit  # noqa: PLC0415
+    from ..report.html import write_html  # noqa: PLC0415
+    from ..report.json_report import write_json  # noqa: PLC0415
+    from ..report.markdown import write_markdown  # noqa: PLC0415
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(result, out / "report.json", extra=extra)
+    write_markdown(result, out / "report.md")
+    from ..report.summary_html import write_plot_data  # noqa: PLC0415
+    write_plot_data(result, out / "plot_data.json")
+    figures = dict(images or {})
+    if plot:
+        plot_fit(result, path=out / "fit.png")
+        figures = {"fit.png": out / "fit.png", **figures}
+    write_html(result, out / "report.html", images=figures, extra=extra)
+
+
+def _fmt_estimate(name: str, e) -> str:
+    """One line per estimate, honest about one-sided and undetermined parameters."""
+    d = e if isinstance(e, dict) else e.as_dict()
+    from ..report.text import estimate_text  # noqa: PLC0415
+    return f"{name} = {estimate_text(name, d)}"
+
+
+def summary_text(result, out: Path) -> str:
+    d = result.as_dict()
+    lines = [f"slip: {d['slip'].get('verdict')}"]
+    if d.get("model"):
+        lines.append(f"membrane: {d['model']['membrane']} ({d['model']['why']})")
+    shown = dict(d.get("parameters", {}))
+    for name, e in shown.items():
+        lines.append(_fmt_estimate(name, e))
+    n_warn = len(d.get("warnings", []) or [])
+    lines.append(f"{n_warn} warning(s); {d.get('model_evaluations')} model evaluations, "
+                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, report.html"
+                 + ("" if not (out / "fit.png").exists() else ", fit.png"))
+    return "\n".join(lines)
