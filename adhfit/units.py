@@ -19,7 +19,8 @@ from .errors import DataError, InputError
 if TYPE_CHECKING:
     import pint
 
-__all__ = ["ureg", "registry", "DIMENSIONS", "GROUPS", "Scales", "parse_quantity", "unit_factor"]
+__all__ = ["ureg", "registry", "DIMENSIONS", "GROUPS", "Scales", "parse_quantity",  # noqa: F822 (ureg: __getattr__)
+           "unit_factor"]
 
 
 @lru_cache(maxsize=1)

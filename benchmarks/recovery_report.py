@@ -3,7 +3,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import recovery_stats as rs
 
 ABBREV = {"determined": "det", "lower_bound": "lb", "upper_bound": "ub", "undetermined": "und", "error": "err"}
 _HEAD = ("n | W bias % | W sd % | W coverage | W status | μh bias % | μh sd % | μh coverage | μh status "

@@ -32,8 +32,6 @@ import argparse
 import json
 import math
 import multiprocessing as mp
-import os
-import platform
 import sys
 import time
 import traceback

@@ -6,8 +6,6 @@ no outputs.
 """
 from __future__ import annotations
 
-import os
-import sys
 from pathlib import Path
 
 import pytest

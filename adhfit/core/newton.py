@@ -23,7 +23,7 @@ OK, FAIL_BRACKET, FAIL_INNER, FAIL_OUTER = 0, 1, 2, 3
 STEP = 1e-30
 XTOL = 4e-15
 MAXITER = 60
-#: iterations of a Newton with chord steps (:func:`gap_from`, ``solve.joint_one``)
+#: iterations of a Newton with chord steps (:func:`gap_from`, ``solve._joint_one``)
 JOINT_MAXITER = 12
 #: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
 #: step before it; otherwise the next iteration takes a fresh Jacobian

@@ -2,7 +2,7 @@
 
 Displacement control fixes kappa: an implicit row solves the material condition alone
 (``newton.inner_one``). Pressure control adds the gap condition d = d_fix: a joint (x, kappa) Newton
-from a predictor (:func:`joint_one`), else a Newton on kappa whose iterates re-solve x
+from a predictor (:func:`_joint_one`), else a Newton on kappa whose iterates re-solve x
 (:func:`pressure_one`). :func:`derivative_row` carries d(state)/d(locator) along a branch by complex
 steps. Never raises: statuses as in :mod:`.newton`.
 """
@@ -17,7 +17,7 @@ from .jit import jit
 from .newton import (CHORD_RATE, FAIL_OUTER, JOINT_MAXITER, MAXITER, OK, STEP, damped_step,
                      gap_from, inner_one, stop)
 
-__all__ = ["FD_STEP", "joint_one", "pressure_one", "solve_one", "solve_batch", "solve_observe_batch",
+__all__ = ["FD_STEP", "pressure_one", "solve_one", "solve_batch", "solve_observe_batch",
            "derivative_row"]
 
 #: relative step of the forward differences of the joint Newton's Jacobian, sqrt(machine epsilon)

@@ -17,8 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Mapping
 
 import numpy as np
 
@@ -29,53 +28,17 @@ from .lsq import fit_slip
 from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
 from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
 from .posterior import Target, default_priors
-from .result import Estimate, FitResult, clean
+from .result import Estimate, FitResult
 from .selection import SCALE, compare, evidence_word
 from .summary import summarize
 
-__all__ = ["McmcFitResult", "fit_curve_mcmc", "DEFAULTS"]
+__all__ = ["fit_curve_mcmc", "DEFAULTS"]
 
-#: default run settings (budget: a 300-row curve, both slips, ~60 s on 2 cores at ~7 ms an evaluation)
+#: default run settings (a 200-row curve, both slips: ~12,000 evaluations of ~0.3 ms, a few seconds per core)
 #: check_every = 5 steps is ~3 τ here, as emcee's own example checks every ~2.5 τ (100 steps, τ ≈ 40)
 DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "check_every": 5, "max_steps": 300,
             "evidence_draws": 300, "predictive_draws": 60}
 CI_METHOD = "posterior 2.5/97.5 percentiles"
-
-
-@dataclass(frozen=True)
-class McmcFitResult(FitResult):
-    """A :class:`FitResult` with the MCMC run's summary (``mcmc``), samples and predictive band.
-
-    Attributes
-    ----------
-    mcmc : mapping
-        JSON-ready: seed, noise model, priors, per slip condition its diagnostics and evidence, the
-        model probabilities, cost.
-    samples : mapping slip -> ndarray (n, k)
-        Kept posterior samples in SI, columns ``mcmc["parameters"][slip]``.
-    predictive : mapping
-        Posterior-predictive band at the data rows of the reported fit (``slip``, ``median``,
-        ``lo``/``hi`` (model curve, 95 %), ``lo_obs``/``hi_obs`` (with the noise)).
-    """
-
-    mcmc: Mapping[str, Any] = field(default_factory=dict)
-    samples: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
-    predictive: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
-
-    @property
-    def converged(self) -> bool:
-        return bool(self.mcmc.get("converged"))
-
-    def as_dict(self) -> dict:
-        d = super().as_dict()
-        d.update(clean({"seed": self.mcmc.get("seed"), "converged": self.converged,
-                        "model_probabilities": self.mcmc.get("model_probabilities", {}).get("probabilities"),
-                        # the sampler's diagnostics per slip condition (kept), plus the solver notes list
-                        "diagnostics": {s: v["diagnostics"] for s, v in self.mcmc.get("slips", {}).items()}
-                        | {"notes": list(self.diagnostics)},
-                        "mcmc": dict(self.mcmc)}))
-        return d
-
 
 #: a posterior percentile within this fraction of the prior's range from its edge is prior-limited
 PRIOR_EDGE = 0.05
@@ -233,7 +196,7 @@ def _run_jobs(jobs: list, processes: int) -> list[dict]:
 def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
                    fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
                    points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
-                   progress: bool | None = None, membrane: str | None = None, **settings) -> McmcFitResult:
+                   progress: bool | None = None, membrane: str | None = None, **settings) -> FitResult:
     """Bayesian fit of W_ad, μh (and offsets) under each slip condition, and the slip condition's probability.
 
     Parameters
@@ -258,7 +221,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
 
     Returns
     -------
-    McmcFitResult
+    FitResult
+        With :attr:`~.result.FitResult.sampling`: the run's summary, the samples and the band.
     """
     t0 = time.perf_counter()
     unknown = set(settings) - set(DEFAULTS)
@@ -364,7 +328,7 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
     options = {"slip": slip, "sigma": sigma, "fit_x_offset": raws[slips[0]].par.fit_x_offset,
                "fit_force_offset": fit_force_offset, "points": points, "membrane": membrane} | cfg
     rep_fit = fits[rep]
-    return McmcFitResult(
+    return FitResult(
         method="mcmc", slip=verdict, parameters=reported, fits=fits, n_points=len(curve.x),
         n_excluded=len(curve.excluded), sigma=rep_fit.sigma,
         sigma_source="given" if sigma is not None else "integrated out (prior ∝ 1/σ); the value shown is the "
@@ -372,5 +336,5 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         warnings=tuple(checks + list(warn)), diagnostics=tuple(diagnostics), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
         n_histories=sum(f.n_histories for f in lsq_fits.values()), wall_time=wall,
         provenance=_provenance(curve, scene, seed, "mcmc", options), segments=_segments(seg, lsq_fits[rep]),
-        excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), mcmc=summary,
-        samples=samples, predictive=band, model=model_info)
+        excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), model=model_info,
+        sampling={"summary": summary, "samples": samples, "predictive": band})

@@ -14,7 +14,6 @@ import pandas as pd
 
 from ..errors import InputError
 from ..scene import Scene
-from ..simulation import simulate
 from ..units import parse_quantity
 from .synthetic import synthetic_curve
 

@@ -243,6 +243,14 @@ class FitResult:
     curves : tuple of dict
         A global fit's curves (docs/contracts.md A7: ``file``, ``offsets``, ``redchi``, ``n_points`` and the
         per-curve checks); empty for a single curve.
+    sampling : mapping, optional
+        An MCMC fit's run (``None`` for least squares): ``summary`` (JSON-ready: seed, noise model,
+        priors, per slip condition its diagnostics and evidence, the model probabilities, cost; also
+        :attr:`mcmc`), ``samples`` (slip -> kept posterior samples in SI, an (n, k) array whose
+        columns are ``summary["slips"][slip]["parameters"]``; also :attr:`samples`) and
+        ``predictive`` (the posterior-predictive band at the data rows of the reported fit: ``slip``,
+        ``median``, ``lo``/``hi`` for the model curve, ``lo_obs``/``hi_obs`` with the noise; also
+        :attr:`predictive`).
     """
 
     method: str
@@ -266,10 +274,33 @@ class FitResult:
     model: Mapping[str, Any] = field(default_factory=lambda: dict(MODEL))
     observables: tuple[str, ...] = ("force",)
     curves: tuple = ()
+    sampling: Mapping[str, Any] | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         for key in ("slip", "parameters", "fits", "provenance", "segments", "raw", "model"):
             object.__setattr__(self, key, MappingProxyType(dict(getattr(self, key))))
+        if self.sampling is not None:
+            object.__setattr__(self, "sampling", MappingProxyType(dict(self.sampling)))
+
+    @property
+    def mcmc(self) -> Mapping[str, Any]:
+        """The MCMC run's JSON-ready summary (empty for least squares)."""
+        return self.sampling["summary"] if self.sampling else {}
+
+    @property
+    def samples(self) -> Mapping[str, Any]:
+        """Kept posterior samples per slip condition, SI (empty for least squares)."""
+        return self.sampling["samples"] if self.sampling else {}
+
+    @property
+    def predictive(self) -> Mapping[str, Any]:
+        """The posterior-predictive band of the reported fit (empty for least squares)."""
+        return self.sampling["predictive"] if self.sampling else {}
+
+    @property
+    def converged(self) -> bool | None:
+        """Whether every MCMC run met its stopping rule and R-hat bound (``None`` for least squares)."""
+        return bool(self.mcmc.get("converged")) if self.sampling else None
 
     @property
     def reported_slip(self) -> str:
@@ -314,7 +345,18 @@ class FitResult:
             "sigma": self.sigma, "sigma_source": self.sigma_source, "segments": dict(self.segments),
             "warnings": list(self.warnings), "model_evaluations": self.n_evaluations,
             "histories": self.n_histories, "wall_time_s": self.wall_time,
-            "provenance": dict(self.provenance)} | ({"curves": list(self.curves)} if self.curves else {}))
+            "provenance": dict(self.provenance)} | ({"curves": list(self.curves)} if self.curves else {})
+            | (self._sampling_dict() if self.sampling else {}))
+
+    def _sampling_dict(self) -> dict:
+        """report.json keys of an MCMC fit (docs/contracts.md A5): seed, convergence, model probabilities,
+        the sampler's diagnostics per slip condition (with the solver notes) and the run's summary."""
+        m = self.mcmc
+        return {"seed": m.get("seed"), "converged": self.converged,
+                "model_probabilities": m.get("model_probabilities", {}).get("probabilities"),
+                "diagnostics": {s: v["diagnostics"] for s, v in m.get("slips", {}).items()}
+                | {"notes": list(self.diagnostics)},
+                "mcmc": dict(m)}
 
     def plot(self, ax=None, **kwargs):
         """Data, both fitted curves and residuals (see :func:`adhfit.report.fit_plot.plot_fit`).

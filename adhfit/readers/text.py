@@ -20,7 +20,7 @@ from pathlib import Path
 from ..errors import DataError
 from .columns import role_of, split_cell
 
-__all__ = ["Layout", "read_lines", "detect_layout", "split_line", "is_number"]
+__all__ = ["Layout", "read_lines", "text_layout", "is_lvm", "split_line", "is_number"]
 
 #: Lines used to find the layout (the header of any real export is far above this).
 _SNIFF_LINES = 2000

@@ -25,7 +25,7 @@ def _diag_table(name: str, d: dict) -> list[str]:
 
 
 def mcmc_sections(result) -> list[str]:
-    """Markdown lines describing an MCMC fit (:class:`~adhfit.fitting.mcmc_fit.McmcFitResult`)."""
+    """Markdown lines describing an MCMC fit (:class:`~adhfit.fitting.result.FitResult` of an MCMC fit)."""
     m = result.mcmc
     probs = m["model_probabilities"]
     head = ("**The MCMC run converged** (stopping rule met, R-hat ≤ 1.01 for every parameter of every slip "

@@ -1,5 +1,5 @@
 """MCMC plots: the corner plot of a slip condition's posterior (least-squares point marked) and the data
-with the posterior-predictive band.  Draw from a stored :class:`~adhfit.fitting.mcmc_fit.McmcFitResult`;
+with the posterior-predictive band.  Draw from a stored :class:`~adhfit.fitting.result.FitResult` of an MCMC fit;
 never re-run anything."""
 from __future__ import annotations
 
@@ -22,7 +22,8 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
 
     Parameters
     ----------
-    result : McmcFitResult
+    result : FitResult
+        Of an MCMC fit (with ``sampling``).
     slip : str, optional
         Default: the reported slip condition.
     path : path, optional
@@ -56,7 +57,8 @@ def plot_predictive(result, *, ax=None, path: str | Path | None = None):
 
     Parameters
     ----------
-    result : McmcFitResult
+    result : FitResult
+        Of an MCMC fit (with ``sampling``).
     ax : matplotlib Axes, optional
     path : path, optional
 
