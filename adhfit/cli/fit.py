@@ -1,9 +1,9 @@
-"""``adhfit fit``: one curve by least squares, and the dispatch to a batch, ``--global`` or MCMC.
+"""``adhfit fit``: one curve (least squares or MCMC), and the dispatch to a batch or ``--global``.
 
-Thin: read the scene and the curve, call :func:`adhfit.fitting.fit.fit_curve`, write the reports
-(:mod:`.writing`), print a short summary.  Invalid input raises :class:`~adhfit.errors.InputError` /
-:class:`~adhfit.errors.DataError`, which :func:`adhfit.cli.main.main` turns into one line on standard
-error and exit status 2.
+Thin: read the scene and the curve, call :func:`adhfit.fit`, write every report with
+:func:`adhfit.report.write`, print a short summary.  Invalid input raises
+:class:`~adhfit.errors.InputError` / :class:`~adhfit.errors.DataError`, which
+:func:`adhfit.cli.main.main` turns into one line on standard error and exit status 2.
 """
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .arguments import fit_force_offset, fit_x_offset, read_options
 from .engine import elapsed, start_engine
-from .writing import check_output_dir, summary_text, write_reports
+from .writing import check_output_dir, summary_text
 
 __all__ = ["run_fit"]
 
@@ -29,28 +29,31 @@ def run_fit(args) -> int:
             return batch.run_batch(args, run_fit)
         args.data = args.data[0]
     from ..data import read_curve  # noqa: PLC0415
+    from ..fitting.api import fit  # noqa: PLC0415
+    from ..report import write  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from ..fitting.fit import fit_curve  # noqa: PLC0415
     if args.scene is None:
         args.scene = batch.single_scene(args.data)
-    out = args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit")
-    check_output_dir(out)
-    if args.method == "mcmc":
-        from .mcmc import run_fit_mcmc  # noqa: PLC0415
-        return run_fit_mcmc(args)
+    out = check_output_dir(args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit"))
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     scene = load_scene(args.scene)
     curve = read_curve(args.data, scene.control, **read_options(args))
     quiet = getattr(args, "quiet", False)
     startup = start_engine(scene.control, quiet=quiet)
+    mcmc = args.method == "mcmc"
+    # MCMC samples the two slip conditions in two processes: one running clock here, no bars there
+    by_method = {"outdir": out, "progress": False} if mcmc else {"profile": not args.no_profile}
     with elapsed(f"fitting {Path(args.data).name}", enabled=False if quiet else None):
-        result = fit_curve(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
-                           fit_x_offset=fit_x_offset(args, scene.control), fit_force_offset=fit_force_offset(args),
-                           seed=args.seed, points=args.points, profile=not args.no_profile,
-                           membrane=getattr(args, "membrane", None))
-    write_reports(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
-    print(summary_text(result, out))
+        result = fit(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
+                     fit_x_offset=fit_x_offset(args, scene.control), fit_force_offset=fit_force_offset(args),
+                     seed=args.seed, points=args.points, membrane=getattr(args, "membrane", None), **by_method)
+    write(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
+    text = summary_text(result, out)
+    if mcmc:
+        state = "converged" if result.converged else "NOT CONVERGED (see report.html)"
+        probs = ", ".join(f"P({k}) = {v:.3g}" for k, v in result.mcmc["model_probabilities"]["probabilities"].items())
+        text = (f"MCMC {state}; {probs}; seed {result.mcmc['seed']}\n{text}\n"
+                "MCMC outputs: fit_mcmc.png, corner.png, chain.h5")
+    print(text)
     return 0
-
-

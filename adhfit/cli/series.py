@@ -1,9 +1,9 @@
 """``adhfit fit FILE ... --global`` (docs/contracts.md A7): one fit of a test series.
 
 Thin: find the curves and each one's scene (``--scene``, else the nearest ``scene.toml``, as in a
-batch), call :func:`adhfit.fitting.global_fit.fit_global`, write ``report.json`` (A5/A5b plus ``curves``),
-``report.md`` and ``fit.png`` (every curve with the shared fit and its residuals) into the output
-directory, print a short summary.
+batch), call :func:`adhfit.fitting.global_fit.fit_global`, write the reports with
+:func:`adhfit.report.write` (``report.json`` with ``curves``, ``report.md``, ``fit.png``: every curve with
+the shared fit and its residuals), print a short summary.
 """
 from __future__ import annotations
 
@@ -31,8 +31,7 @@ def _jobs(args):
 def run_global(args) -> int:
     """Run ``adhfit fit ... --global`` from parsed arguments; returns the exit status."""
     from ..data import read_curve  # noqa: PLC0415
-    from ..report.json_report import write_json  # noqa: PLC0415
-    from ..report.series_plot import plot_series, write_series_markdown  # noqa: PLC0415
+    from ..report import write  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
     from ..fitting.global_fit import fit_global  # noqa: PLC0415
@@ -54,11 +53,7 @@ def run_global(args) -> int:
     result = fit_global(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_a,
                         contact_radius=not getattr(args, "no_contact_radius", False), fit_x_offset=fit_x,
                         fit_force_offset=True, seed=args.seed, points=args.points, profile=not args.no_profile)
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(result, out / "report.json")
-    write_series_markdown(result, out / "report.md")
-    if not args.no_plot:
-        plot_series(result, path=out / "fit.png")
+    write(result, out, plot=not args.no_plot)
     print(_summary(result, out))
     return 0
 

@@ -1,5 +1,5 @@
-"""The output folder and the reports of one fit: report.json, report.md, report.html, fit.png and the
-summary lines the command line prints."""
+"""The output folder (checked before any work) and the summary lines the command line prints; the
+reports themselves are written by :func:`adhfit.report.write`."""
 from __future__ import annotations
 
 import os
@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["check_output_dir", "write_reports", "summary_text"]
+__all__ = ["check_output_dir", "summary_text"]
 
 
 def check_output_dir(path: Path) -> Path:
@@ -31,26 +31,6 @@ def check_output_dir(path: Path) -> Path:
     return path
 
 
-def write_reports(result, out: Path, *, plot: bool = True, images: dict | None = None,
-                  extra: dict | None = None) -> None:
-    """Write report.json, report.md, report.html, plot_data.json (data and fitted curve, for a batch's
-    summary.html) and (``plot``) fit.png of one fit into ``out``."""
-    from ..report.fit_plot import plot_fit  # noqa: PLC0415
-    from ..report.html import write_html  # noqa: PLC0415
-    from ..report.json_report import write_json  # noqa: PLC0415
-    from ..report.markdown import write_markdown  # noqa: PLC0415
-    out.mkdir(parents=True, exist_ok=True)
-    write_json(result, out / "report.json", extra=extra)
-    write_markdown(result, out / "report.md")
-    from ..report.summary_html import write_plot_data  # noqa: PLC0415
-    write_plot_data(result, out / "plot_data.json")
-    figures = dict(images or {})
-    if plot:
-        plot_fit(result, path=out / "fit.png")
-        figures = {"fit.png": out / "fit.png", **figures}
-    write_html(result, out / "report.html", images=figures, extra=extra)
-
-
 def _fmt_estimate(name: str, e) -> str:
     """One line per estimate, honest about one-sided and undetermined parameters."""
     d = e if isinstance(e, dict) else e.as_dict()
@@ -59,6 +39,7 @@ def _fmt_estimate(name: str, e) -> str:
 
 
 def summary_text(result, out: Path) -> str:
+    """The lines ``adhfit fit`` prints: the slip verdict, the membrane model, the estimates, the cost."""
     d = result.as_dict()
     lines = [f"slip: {d['slip'].get('verdict')}"]
     if d.get("model"):

@@ -10,15 +10,16 @@ started from the first one's optimum (the two optima are usually close).  The me
 from __future__ import annotations
 
 import dataclasses
-import math
-import platform
 import time
-from pathlib import Path
 
 from ..errors import InputError
 from .model import CurveModel, segment
-from .options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
+from .options import DEFAULT_POINTS, METHODS
 from .lsq import fit_slip
+from .prepare import check_options as _check_options
+from .prepare import provenance as _provenance
+from .prepare import read_inputs as _inputs
+from .prepare import segments_report as _segments
 from .result import Estimate, FitResult, SlipFit
 from .selection import compare
 from .summary import summarize
@@ -29,33 +30,6 @@ SIGMA_ESTIMATED = "estimated from the residuals (lmfit scales the covariance by 
 _MAIN = ("work_of_adhesion", "mu_h")
 #: w = W_ad/μh within this fraction of the table's upper bound earns a warning
 _W_EDGE = 0.98
-
-
-def _inputs(data, scene, read_options=None):
-    from ..data import read_curve  # noqa: PLC0415
-    from ..scene import Scene, load_scene  # noqa: PLC0415
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
-    curve = read_curve(data, scene.control, **(read_options or {})) if isinstance(data, (str, Path)) else data
-    if curve.control != scene.control:
-        raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
-    return curve, scene
-
-
-def _check_options(method, slip, sigma, points, membrane="auto"):
-    from ..scene import MEMBRANE_MODELS  # noqa: PLC0415
-    if membrane not in MEMBRANE_MODELS:
-        raise InputError("membrane", membrane, "one of " + ", ".join(map(repr, MEMBRANE_MODELS)))
-    if method == "mcmc":
-        raise InputError("method", "mcmc", "'lsq' (MCMC is not available in this version)")
-    if method not in METHODS:
-        raise InputError("method", method, "one of 'lsq', 'mcmc'")
-    if slip not in SLIP_CHOICES:
-        raise InputError("slip", slip, "one of " + ", ".join(map(repr, SLIP_CHOICES)))
-    if sigma is not None and not (isinstance(sigma, (int, float)) and math.isfinite(sigma) and sigma > 0):
-        raise InputError("sigma", sigma, "a positive force noise in N")
-    if not (isinstance(points, int) and 40 <= points <= 5000):
-        raise InputError("points", points, "an integer in [40, 5000]")
 
 
 def _membrane_verdict(large: dict, exact: dict, info: dict) -> tuple[dict, dict, bool]:
@@ -125,18 +99,6 @@ def _warnings(scene, fits, verdict, curve, reported, model_info, effects) -> tup
     return out, diag
 
 
-def _segments(seg, rep: SlipFit) -> dict:
-    """Row-order segments of the report: the end of loading from the data, pull-off from the fit."""
-    d = seg.as_dict()
-    j = rep.split
-    n = seg.n
-    d.update({"i_jump": j, "n_attached": (n if j is None else j) - seg.i_turn - 1,
-              "n_detached": 0 if j is None else n - j, "jump_from": "fitted model (its turning point)"})
-    if j is not None and rep.predicted is not None:
-        d["jump"] = float(abs(rep.predicted[j - 1] - rep.predicted[j]))
-    return d
-
-
 def _decide(fits: dict[str, SlipFit]) -> dict:
     """The slip verdict; ΔBIC is divided by the widening² of the better fit when its noise is correlated."""
     bic = {s: f.bic for s, f in fits.items()}
@@ -149,22 +111,10 @@ def _decide(fits: dict[str, SlipFit]) -> dict:
     return compare(bic, aic)
 
 
-def _provenance(curve, scene, seed, method, options) -> dict:
-    import lmfit  # noqa: PLC0415
-    import numpy  # noqa: PLC0415
-    import scipy  # noqa: PLC0415
-    from .. import __version__  # noqa: PLC0415
-    fields = {f.name: getattr(scene, f.name) for f in dataclasses.fields(scene) if f.name != "source"}
-    return {"adhfit_version": __version__, "input": curve.path, "input_sha256": curve.sha256,
-            "scene_file": scene.source, "scene": fields, "seed": seed, "method": method, "options": options,
-            "backend": "numba", "python": platform.python_version(), "numpy": numpy.__version__,
-            "scipy": scipy.__version__, "lmfit": lmfit.__version__}
-
-
 def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigma: float | None = None,
               fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
               points: int = DEFAULT_POINTS, profile: bool = True, membrane: str | None = None,
-              read_options: dict | None = None) -> FitResult:
+              read_options: dict | None = None, **mcmc_options) -> FitResult:
     """Fit W_ad, μh and the slip condition to a measured curve.
 
     Parameters
@@ -174,7 +124,8 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     scene : path or adhfit.scene.Scene
         The scene (TOML, A3): geometry and the fixed pressure or gap.
     method : {"lsq", "mcmc"}
-        Only ``"lsq"`` in this version.
+        Least squares (lmfit), or posterior sampling (emcee, :func:`.mcmc_fit.fit_curve_mcmc`, which
+        starts from the least-squares fits).  Both return a :class:`~.result.FitResult`.
     slip : {"auto", "no-slip", "frictionless"}, optional
         Default: the scene's ``[interface] slip``.  ``"auto"`` fits both and compares them.
     sigma : float, optional
@@ -200,11 +151,22 @@ def fit_curve(data, scene, *, method: str = "lsq", slip: str | None = None, sigm
     read_options : dict, optional
         Keywords for :func:`adhfit.data.read_curve` when ``data`` is a path: ``columns``, ``units``,
         ``force_sign``, ``displacement_sign``.
+    **mcmc_options
+        ``method="mcmc"`` only: ``outdir``, ``workers``, ``progress`` and the sampler settings of
+        :func:`.mcmc_fit.fit_curve_mcmc` (``n_walkers``, ``max_steps``, ...).
 
     Returns
     -------
     FitResult
     """
+    if method == "mcmc":
+        from .mcmc_fit import fit_curve_mcmc  # noqa: PLC0415 - emcee loads only for MCMC
+        return fit_curve_mcmc(data, scene, slip=slip, sigma=sigma, fit_x_offset=fit_x_offset,
+                              fit_force_offset=fit_force_offset, seed=seed, points=points, membrane=membrane,
+                              read_options=read_options, **mcmc_options)
+    if mcmc_options:
+        name = sorted(mcmc_options)[0]
+        raise InputError(name, mcmc_options[name], "absent with method='lsq' (an MCMC option)")
     t0 = time.perf_counter()
     curve, scene = _inputs(data, scene, read_options)
     from .plausibility import check_curve  # noqa: PLC0415

@@ -23,7 +23,7 @@ import numpy as np
 
 from .diagnostics import diagnose
 from .evidence import StudentT, importance_evidence, model_probabilities
-from .fit import _check_options, _inputs, _provenance, _segments
+from .prepare import check_options, provenance, read_inputs, segments_report
 from .lsq import fit_slip
 from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
 from .model import DEFAULT_POINTS, CurveModel, ModelDomainError, segment
@@ -196,7 +196,8 @@ def _run_jobs(jobs: list, processes: int) -> list[dict]:
 def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None = None,
                    fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
                    points: int = DEFAULT_POINTS, outdir=None, workers: int | None = None,
-                   progress: bool | None = None, membrane: str | None = None, **settings) -> FitResult:
+                   progress: bool | None = None, membrane: str | None = None, read_options: dict | None = None,
+                   **settings) -> FitResult:
     """Bayesian fit of W_ad, μh (and offsets) under each slip condition, and the slip condition's probability.
 
     Parameters
@@ -215,6 +216,8 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         tqdm bar on standard error (default: only on a terminal).
     membrane : {"auto", "large-stretch", "exact"}, optional
         As for :func:`adhfit.fitting.fit.fit_curve` (the sampler then uses the chosen membrane).
+    read_options : dict, optional
+        As for :func:`adhfit.fitting.fit.fit_curve`.
     **settings
         Override :data:`DEFAULTS` (``n_walkers``, ``n_ensembles``, ``tune_steps``, ``check_every``,
         ``max_steps``, ``evidence_draws``, ``predictive_draws``).
@@ -230,12 +233,12 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
         from ..errors import InputError  # noqa: PLC0415
         raise InputError(sorted(unknown)[0], settings[sorted(unknown)[0]], "one of " + ", ".join(DEFAULTS))
     cfg = DEFAULTS | settings
-    curve, scene = _inputs(data, scene)
+    curve, scene = read_inputs(data, scene, read_options)
     from .plausibility import check_curve  # noqa: PLC0415
     curve, checks = check_curve(curve, scene)  # the same checks as a least-squares fit
     slip = scene.slip if slip is None else slip
     membrane = scene.membrane_model if membrane is None else membrane
-    _check_options("lsq", slip, sigma, points, membrane)
+    check_options("mcmc", slip, sigma, points, membrane)
     seed = int(np.random.SeedSequence().entropy % 2**63) if seed is None else int(seed)
     root = np.random.SeedSequence(seed)
     slips = ("no-slip", "frictionless") if slip == "auto" else (slip,)
@@ -335,6 +338,6 @@ def fit_curve_mcmc(data, scene, *, slip: str | None = None, sigma: float | None 
                                                        "least-squares estimate",
         warnings=tuple(checks + list(warn)), diagnostics=tuple(diagnostics), n_evaluations=n_evals + sum(f.n_evaluations for f in lsq_fits.values()),
         n_histories=sum(f.n_histories for f in lsq_fits.values()), wall_time=wall,
-        provenance=_provenance(curve, scene, seed, "mcmc", options), segments=_segments(seg, lsq_fits[rep]),
+        provenance=provenance(curve, scene, seed, "mcmc", options), segments=segments_report(seg, lsq_fits[rep]),
         excluded=tuple(curve.excluded), curve=curve, raw=dict(chains), model=model_info,
         sampling={"summary": summary, "samples": samples, "predictive": band})
