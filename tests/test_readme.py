@@ -84,11 +84,11 @@ def sandbox(tmp_path):
 def test_python_blocks_run(sandbox):
     where, env = sandbox
     code = "\n\n".join(_blocks("python"))
-    assert "fit_curve" in code and "simulate_scene" in code and "s.plot()" in code
+    assert "adhfit.fit(" in code and 'method="mcmc"' in code and "simulate_scene" in code and "s.plot()" in code
     run = subprocess.run([sys.executable, "-c", code], cwd=where, env=env, capture_output=True, text=True,
                          timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
-    assert (where / "report.html").is_file()
+    assert (where / "out" / "report.html").is_file() and (where / "out" / "fit.png").is_file()
 
 
 def _later_bash() -> list[str]:
