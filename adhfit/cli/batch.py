@@ -278,7 +278,9 @@ def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace]
         try:
             if job.scene is None:
                 raise InputError("scene", None, f"a scene file ({job.scene_note})")
-            one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": here.out})
+            # one curve per process at a time: every core already fits, so no second process draws
+            one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": here.out,
+                               "painter": False})
             with contextlib.redirect_stdout(buf):
                 status = fit_one(one)
             if status != 0:

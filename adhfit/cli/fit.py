@@ -11,6 +11,7 @@ from pathlib import Path
 
 from .arguments import fit_force_offset, fit_x_offset, read_options
 from .engine import elapsed, start_engine
+from .painter import Painter
 from .writing import check_output_dir, summary_text
 
 __all__ = ["run_fit"]
@@ -28,6 +29,18 @@ def run_fit(args) -> int:
                 check_output_dir(args.output)
             return batch.run_batch(args, run_fit)
         args.data = args.data[0]
+    # a second process loads matplotlib and draws fit.png on the other core while this one fits
+    painter = Painter() if not args.no_plot and getattr(args, "painter", True) else None
+    try:
+        return _fit_one(args, painter)
+    finally:
+        if painter is not None:
+            painter.close()
+
+
+def _fit_one(args, painter) -> int:
+    """One curve: read, fit (least squares or MCMC), write the reports, print the summary."""
+    from . import batch  # noqa: PLC0415
     from ..data import read_curve  # noqa: PLC0415
     from ..fitting.api import fit  # noqa: PLC0415
     from ..report import write  # noqa: PLC0415
@@ -48,7 +61,13 @@ def run_fit(args) -> int:
         result = fit(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
                      fit_x_offset=fit_x_offset(args, scene.control), fit_force_offset=fit_force_offset(args),
                      seed=args.seed, points=args.points, membrane=getattr(args, "membrane", None), **by_method)
-    write(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup})
+    drawn = ()
+    if painter is not None:
+        from ..report.fit_plot import fit_view  # noqa: PLC0415
+        out.mkdir(parents=True, exist_ok=True)
+        painter.paint(fit_view(result), out / "fit.png")
+        drawn = ("fit.png",) if painter.finish() else ()
+    write(result, out, plot=not args.no_plot, extra={"engine_startup_s": startup}, drawn=drawn)
     text = summary_text(result, out)
     if mcmc:
         state = "converged" if result.converged else "NOT CONVERGED (see report.html)"

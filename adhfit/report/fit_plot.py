@@ -1,17 +1,44 @@
 """fit.png: the data, both fitted curves, the stages shaded, and the residuals of the reported fit.
 
 Draws from a :class:`~adhfit.fitting.result.FitResult`'s stored predictions and model curves; never
-re-runs a fit.
+re-runs a fit.  :func:`fit_view` extracts what the figure shows as plain JSON-ready data, and
+:func:`draw_fit` draws from that alone, so that another process can draw it (:mod:`.painter`).
 """
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .plots import STAGE_COLORS, _pyplot, file_figure
 
-__all__ = ["plot_fit"]
+__all__ = ["plot_fit", "fit_view", "draw_fit"]
+
+
+def _plain(x: Any) -> Any:
+    """Arrays to lists and NaN to None, recursively (JSON-ready)."""
+    if isinstance(x, dict) or hasattr(x, "items"):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
+    if isinstance(x, (float, np.floating)):
+        return None if not np.isfinite(x) else float(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+def fit_view(result) -> dict:
+    """What fit.png shows, as JSON-ready data: the curve, the segments, each fit's model curve and
+    predictions, the reported slip condition, the verdict and the fitted values."""
+    d = result.as_dict()
+    return _plain({"control": result.curve.control, "x": result.curve.x, "force": result.curve.force,
+                   "segments": {k: result.segments[k] for k in ("i_turn", "i_jump")},
+                   "fits": {s: {"model_curve": dict(f.model_curve), "predicted": f.predicted}
+                            for s, f in result.fits.items()},
+                   "reported_slip": result.reported_slip, "verdict": result.slip["verdict"],
+                   "parameters": d.get("parameters") or {}})
 
 _SLIP_STYLE = {"no-slip": ("k", "-"), "frictionless": ("#9467bd", "--")}
 
@@ -33,33 +60,34 @@ def _shade(ax, curve: dict, kx: float) -> None:
                label="contact (reported fit)")
 
 
-def _main(ax, result, kx: float) -> None:
-    c = result.curve
-    seg = result.segments
-    n = len(c.x)
+def _main(ax, view: dict, kx: float) -> None:
+    x, force = np.asarray(view["x"], float), np.asarray(view["force"], float)
+    seg = view["segments"]
+    n = len(x)
     idx = np.arange(n)
     load, det = idx <= seg["i_turn"], (idx >= seg["i_jump"]) if seg["i_jump"] is not None else np.zeros(n, bool)
     att = ~load & ~det
     for mask, color, label in ((load, "#1f77b4", "data: loading"), (att, "#d62728", "data: unloading"),
                                (det, "0.5", "data: after pull-off")):
         if mask.any():
-            ax.plot(c.x[mask] * kx, c.force[mask] * 1e3, ".", ms=3, color=color, label=label)
-    for slip, fit in result.fits.items():
-        mc = fit.model_curve
+            ax.plot(x[mask] * kx, force[mask] * 1e3, ".", ms=3, color=color, label=label)
+    reported = view["reported_slip"]
+    for slip, fit in view["fits"].items():
+        mc = fit["model_curve"]
         if not mc:
             continue
         color, ls = _SLIP_STYLE.get(slip, ("k", "-"))
         ax.plot(np.asarray(mc["x_loading"]) * kx, np.asarray(mc["force_loading"]) * 1e3, ls, color=color, lw=1.1,
-                label=f"fit: {slip}" + (" (reported)" if slip == result.reported_slip else ""))
+                label=f"fit: {slip}" + (" (reported)" if slip == reported else ""))
         ax.plot(np.asarray(mc["x_unloading"]) * kx, np.asarray(mc["force_unloading"]) * 1e3, ls, color=color, lw=1.1)
         ax.plot([mc["x_turning_point"] * kx] * 2, [mc["force_turning_point"] * 1e3, 0.0], ":", color=color, lw=0.8)
-    _mark_extrema(ax, result.fits[result.reported_slip].model_curve, kx)
-    _shade(ax, result.fits[result.reported_slip].model_curve, kx)
+    _mark_extrema(ax, view["fits"][reported]["model_curve"], kx)
+    _shade(ax, view["fits"][reported]["model_curve"], kx)
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_ylabel("force (mN, compressive positive)")
-    ax.set_title(f"{result.slip['verdict']}", fontsize=10)
+    ax.set_title(f"{view['verdict']}", fontsize=10)
     ax.legend(fontsize=7, ncol=2, loc="upper left")
-    _values_box(ax, result)
+    _values_box(ax, view)
 
 
 def _mark_extrema(ax, mc, kx: float) -> None:
@@ -75,14 +103,13 @@ def _mark_extrema(ax, mc, kx: float) -> None:
                 label="f_min: most negative force (paper's pull-off force)")
 
 
-def _values_box(ax, result) -> None:
+def _values_box(ax, view: dict) -> None:
     """The fitted values with their 95 % intervals, written on the plot (lower right)."""
     from .text import estimate_text  # noqa: PLC0415
-    d = result.as_dict()
     names = {"work_of_adhesion": "W_ad", "mu_h": "μh"}
-    lines = [f"{names.get(k, k)} = {estimate_text(k, v)}" for k, v in (d.get("parameters") or {}).items()
+    lines = [f"{names.get(k, k)} = {estimate_text(k, v)}" for k, v in view["parameters"].items()
              if isinstance(v, dict)]
-    lines.append(f"slip: {(d.get('slip') or {}).get('verdict')}")
+    lines.append(f"slip: {view['verdict']}")
     ax.text(0.98, 0.03, "\n".join(lines), transform=ax.transAxes, ha="right", va="bottom", fontsize=8, multialignment="left",
             bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "0.7", "alpha": 0.9})
 
@@ -106,7 +133,12 @@ def plot_fit(result, *, ax=None, path: str | Path | None = None, residuals: bool
     matplotlib.axes.Axes
         The main panel.
     """
-    kx, xlabel = _axis(result.curve.control)
+    return draw_fit(fit_view(result), ax=ax, path=path, residuals=residuals)
+
+
+def draw_fit(view: dict, *, ax=None, path: str | Path | None = None, residuals: bool = True):
+    """Draw fit.png from :func:`fit_view`'s data (parameters as :func:`plot_fit`); returns the main axes."""
+    kx, xlabel = _axis(view["control"])
     rax = None
     if ax is None:
         subplots = file_figure if path is not None else _pyplot().subplots
@@ -115,12 +147,13 @@ def plot_fit(result, *, ax=None, path: str | Path | None = None, residuals: bool
                                       gridspec_kw={"height_ratios": (3, 1)})
         else:
             fig, ax = subplots(figsize=(7.0, 4.6), layout="constrained")
-    _main(ax, result, kx)
+    _main(ax, view, kx)
     if rax is not None:
-        c = result.curve
-        for slip, fit in result.fits.items():
+        x, force = np.asarray(view["x"], float), np.asarray(view["force"], float)
+        for slip, fit in view["fits"].items():
             color, _ = _SLIP_STYLE.get(slip, ("k", "-"))
-            rax.plot(c.x * kx, (c.force - fit.predicted) * 1e3, ".", ms=2.5, color=color, label=slip)
+            rax.plot(x * kx, (force - np.asarray(fit["predicted"], float)) * 1e3, ".", ms=2.5, color=color,
+                     label=slip)
         rax.axhline(0.0, color="0.6", lw=0.6)
         rax.set_ylabel("residual (mN)")
         rax.set_xlabel(xlabel)

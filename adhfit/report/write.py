@@ -15,7 +15,8 @@ from typing import Any
 __all__ = ["write"]
 
 
-def write(result: Any, outdir: str | Path, *, plot: bool = True, extra: Mapping[str, Any] | None = None) -> list[Path]:
+def write(result: Any, outdir: str | Path, *, plot: bool = True, extra: Mapping[str, Any] | None = None,
+          drawn: tuple[str, ...] = ()) -> list[Path]:
     """Write the reports of ``result`` (a :class:`~adhfit.fitting.result.FitResult`) into ``outdir``.
 
     Parameters
@@ -27,6 +28,9 @@ def write(result: Any, outdir: str | Path, *, plot: bool = True, extra: Mapping[
         Draw the figures (``fit.png``, and for MCMC ``fit_mcmc.png`` and ``corner.png``).
     extra : mapping, optional
         More top-level keys for ``report.json`` and the page (e.g. ``engine_startup_s``).
+    drawn : tuple of str
+        Figures already saved in ``outdir`` (e.g. ``("fit.png",)`` drawn by another process): used as
+        they are, not drawn again.
 
     Returns
     -------
@@ -45,15 +49,16 @@ def write(result: Any, outdir: str | Path, *, plot: bool = True, extra: Mapping[
     write_json(result, written[0], extra=extra)
     write_markdown(result, written[1])
     write_plot_data(result, written[2])
-    figures = _figures(result, out) if plot else {}
+    figures = _figures(result, out, drawn) if plot else {}
     write_html(result, out / "report.html", images=figures, extra=extra)
     return written + [out / "report.html"] + list(figures.values())
 
 
-def _figures(result: Any, out: Path) -> dict[str, Path]:
+def _figures(result: Any, out: Path, drawn: tuple[str, ...]) -> dict[str, Path]:
     """fit.png, and an MCMC fit's fit_mcmc.png and corner.png: name -> path."""
-    from .fit_plot import plot_fit  # noqa: PLC0415
-    plot_fit(result, path=out / "fit.png")
+    if "fit.png" not in drawn:
+        from .fit_plot import plot_fit  # noqa: PLC0415
+        plot_fit(result, path=out / "fit.png")
     figures = {"fit.png": out / "fit.png"}
     if result.sampling:
         from .mcmc_plots import plot_corner, plot_predictive  # noqa: PLC0415
