@@ -14,7 +14,7 @@ Usage (from the repository root)::
     python benchmarks/recovery.py [--replicates 20] [--replicates-other 4] [--noise 0.002 ...]
         [--headline-noise 0.02 0.04] [--variant-noise 0.02] [--cases displacement-curved ...]
         [--slips no-slip frictionless] [--variants clean baseline ...] [--seed 20261201]
-        [--method {lsq,mcmc}] [--workers 2] [--out benchmarks/results/recovery]
+        [--method {lsq,mcmc}] [--workers 2 | --scheduler ADDRESS] [--out benchmarks/results/recovery]
 
 Writes ``OUT.json`` (every replicate and every cell), ``OUT.md`` (tables, the command) and ``OUT.png``.
 """
@@ -28,7 +28,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -133,28 +132,50 @@ def provenance(argv: list[str], wall: float | None, workers: int) -> dict:
             "nproc": os.cpu_count()}
 
 
+def _failed_record(job: dict, message: str) -> dict:
+    """The record of a replicate whose worker process died or was lost (counted as an error)."""
+    none = {"status": "error", "value": None, "lo": None, "hi": None, "covered": None, "rel_err": None}
+    return dict(job, error=message[:300], wall_s=None, selected=None, slip_outcome="error", delta_bic=None,
+                warnings=[], warned_duplicates=False, **{name: dict(none) for name in rs.PARAMS})
+
+
 def _execute(args) -> tuple[list[dict], float]:
-    """Run the plan; every record is also appended to OUT.partial.jsonl as it completes."""
+    """Run the plan with the runners of ``adhfit fit`` batches (serial, ``--workers`` local processes or
+    the Dask cluster at ``--scheduler``); every record is also appended to OUT.partial.jsonl as it
+    completes.  The records come back in plan order whoever ran them."""
+    from adhfit.fitting import runners  # noqa: PLC0415
     jobs = plan(args)
     t0 = time.perf_counter()
-    records = []
+    done: dict[int, dict] = {}
     partial = Path(args.out).with_suffix(".partial.jsonl")
     partial.parent.mkdir(parents=True, exist_ok=True)
     partial.write_text("", encoding="utf-8")
-    pool = ProcessPoolExecutor(max_workers=args.workers) if args.workers > 1 else None
-    try:
-        results = pool.map(run_one, jobs, chunksize=1) if pool else map(run_one, jobs)
-        for k, rec in enumerate(results, 1):
-            records.append(rec)
-            with partial.open("a", encoding="utf-8") as fh:
-                fh.write(json.dumps(rec, default=str) + "\n")
-            print(f"[{k}/{len(jobs)} {time.perf_counter() - t0:.0f} s] {rec['case']} {rec['slip']} "
-                  f"{rec['variant']} {100 * rec['noise']:g} % #{rec['rep']}: W {rec['work_of_adhesion']['status']} "
-                  f"{rec['work_of_adhesion']['covered']}, slip {rec['slip_outcome']}", file=sys.stderr, flush=True)
-    finally:
-        if pool:
-            pool.shutdown()
-    return records, time.perf_counter() - t0
+
+    def report(item: tuple[int, dict]) -> None:
+        k, rec = item
+        done[k] = rec
+        with partial.open("a", encoding="utf-8") as fh:
+            fh.write(json.dumps(rec, default=str) + "\n")
+        print(f"[{len(done)}/{len(jobs)} {time.perf_counter() - t0:.0f} s] {rec['case']} {rec['slip']} "
+              f"{rec['variant']} {100 * rec['noise']:g} % #{rec['rep']}: W {rec['work_of_adhesion']['status']} "
+              f"{rec['work_of_adhesion']['covered']}, slip {rec['slip_outcome']}", file=sys.stderr, flush=True)
+
+    def crashed(k: int, message: str) -> tuple[int, dict]:
+        return k, _failed_record(jobs[k], message)
+
+    calls = [(k, job) for k, job in enumerate(jobs)]
+    if args.scheduler:
+        runners.run_dask(_indexed, calls, args.scheduler, report, crashed)
+    elif args.workers > 1:
+        runners.run_local(_indexed, calls, args.workers, report, crashed)
+    else:
+        for call in calls:
+            report(_indexed(*call))
+    return [done[k] for k in range(len(jobs))], time.perf_counter() - t0
+
+
+def _indexed(k: int, job: dict) -> tuple[int, dict]:
+    return k, run_one(job)
 
 
 def run(args, argv: list[str]) -> dict:
@@ -201,7 +222,9 @@ def parse(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("--variants", nargs="+", default=list(rc.VARIANTS), choices=list(rc.VARIANTS))
     ap.add_argument("--seed", type=int, default=20261201)
     ap.add_argument("--method", choices=("lsq", "mcmc"), default="lsq")
-    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=1, help="local processes (as adhfit fit --workers)")
+    ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="run the replicates on the Dask distributed cluster at ADDRESS (as adhfit fit --scheduler)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "recovery"),
                     help="output path without suffix")
     ap.add_argument("--no-plot", action="store_true")
