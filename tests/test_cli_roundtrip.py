@@ -188,3 +188,17 @@ def test_a_bad_input_leaves_no_output_folder(tmp_path, capsys):
     _, err = capsys.readouterr()
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_engine_loaded_in_a_thread_reports_its_failure(tmp_path, capsys, monkeypatch):
+    """The kernels load in a thread while the fit's libraries import; a failure there ends the run with
+    the CLI's one line, as it would in the main thread."""
+    from adhfit.errors import ConvergenceError
+
+    def broken(control="displacement"):
+        raise ConvergenceError("warm-up history", {"control": control})
+    monkeypatch.setattr(cli_engine, "warm_up", broken)
+    code = main(["fit", str(SAMPLE / "curve.csv"), "--scene", str(SAMPLE / "scene.toml"), "-o",
+                 str(tmp_path / "o"), "--no-plot", "--quiet"])
+    err = capsys.readouterr().err
+    assert code != 0 and len(err.strip().splitlines()) == 1 and "warm-up history" in err

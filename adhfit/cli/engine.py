@@ -14,7 +14,7 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["engine_cache_is_cold", "warm_up", "start_engine", "COMPILING_NOTICE", "elapsed"]
+__all__ = ["engine_cache_is_cold", "warm_up", "start_engine", "EngineLoader", "COMPILING_NOTICE", "elapsed"]
 
 COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
 
@@ -59,6 +59,10 @@ def warm_up(control: str = "displacement") -> float:
     from ..simulation import simulate  # noqa: PLC0415
     t0 = time.perf_counter()
     fixed = {"p": 0.6} if control == "displacement" else {"d": 0.0}
+    import numpy as np  # noqa: PLC0415
+    from ..core import pieces  # noqa: PLC0415 - a fit's interpolation kernels
+    nodes = np.linspace(0.0, 1.0, 8)
+    pieces.loading_values(*pieces.loading_nodes(nodes, nodes, 8), nodes)
     for slip in ("no-slip", "frictionless"):
         simulate(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
         # every fit weighs the exact membrane's effect at its optimum (its kernels compile once too)
@@ -102,6 +106,36 @@ def elapsed(desc: str, *, enabled: bool | None = None):
         stop.set()
         thread.join()
         bar.close()
+
+
+class EngineLoader:
+    """:func:`warm_up` in a thread, started at once: the compiled kernels load while the main thread
+    imports the fitting libraries and reads the data (numba's code loading runs largely outside the
+    GIL, in LLVM).  On a cold cache the notice is printed first (not with ``quiet``)."""
+
+    def __init__(self, *, quiet: bool = False) -> None:
+        if not quiet and engine_cache_is_cold():
+            print(COMPILING_NOTICE, file=sys.stderr, flush=True)
+        self._seconds = 0.0
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            self._seconds = warm_up("displacement")
+        except BaseException as err:  # noqa: BLE001 - raised again in the main thread by wait()
+            self._error = err
+
+    def wait(self, control: str) -> float:
+        """Block until the kernels are loaded (those of ``control`` too); returns the seconds it took."""
+        t0 = time.perf_counter()
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        if control != "displacement":
+            warm_up(control)
+        return self._seconds + (time.perf_counter() - t0 if control != "displacement" else 0.0)
 
 
 def start_engine(control: str, *, quiet: bool = False) -> float:

@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .arguments import fit_force_offset, fit_x_offset, read_options
-from .engine import elapsed, start_engine
+from .engine import EngineLoader, elapsed
 from .painter import Painter
 from .writing import check_output_dir, summary_text
 
@@ -29,16 +29,18 @@ def run_fit(args) -> int:
                 check_output_dir(args.output)
             return batch.run_batch(args, run_fit)
         args.data = args.data[0]
-    # a second process loads matplotlib and draws fit.png on the other core while this one fits
+    # a second process loads matplotlib and draws fit.png on the other core while this one fits, and a
+    # thread loads the compiled kernels while this one imports the fitting libraries
     painter = Painter() if not args.no_plot and getattr(args, "painter", True) else None
+    engine = EngineLoader(quiet=getattr(args, "quiet", False))
     try:
-        return _fit_one(args, painter)
+        return _fit_one(args, painter, engine)
     finally:
         if painter is not None:
             painter.close()
 
 
-def _fit_one(args, painter) -> int:
+def _fit_one(args, painter, engine) -> int:
     """One curve: read, fit (least squares or MCMC), write the reports, print the summary."""
     from . import batch  # noqa: PLC0415
     from ..data import read_curve  # noqa: PLC0415
@@ -53,7 +55,7 @@ def _fit_one(args, painter) -> int:
     scene = load_scene(args.scene)
     curve = read_curve(args.data, scene.control, **read_options(args))
     quiet = getattr(args, "quiet", False)
-    startup = start_engine(scene.control, quiet=quiet)
+    startup = engine.wait(scene.control)
     mcmc = args.method == "mcmc"
     # MCMC samples the two slip conditions in two processes: one running clock here, no bars there
     by_method = {"outdir": out, "progress": False} if mcmc else {"profile": not args.no_profile}
