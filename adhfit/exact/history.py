@@ -252,7 +252,7 @@ def _assemble(c, mc, pin, dl, m, on, turn, fmin):
     for k in ("a", "alpha", "p", "d", "f", "G"):
         cols[k] = np.array([getattr(s, k) for _, s in rows], dtype=float)
     cols["G"][: len(mc)] = 0.0
-    cols["delta"] = np.array([c.delta(s) for _, s in rows], dtype=float)
+    cols["delta"] = c.deltas([s for _, s in rows])
     cols["stable"] = np.arange(len(rows)) <= turn_i
     summary = {"f_max": m.f, "onset": _row(on, c), "f_min": _row(fmin, c), "turning_point": _row(turn, c)}
     return ExactHistory(cols, summary, c.inputs(), [s for _, s in rows])

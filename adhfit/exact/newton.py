@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .jit import jit
 
 from . import kernels as K
 
@@ -20,7 +20,7 @@ CLAMP, A_RES, D_RES, G_RES = 0, 1, 2, 3
 OK, BAD_START, BAD_JAC, SINGULAR, NO_LINE, NO_CONV = 0, 1, 2, 3, 4, 5
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def shot_vals(edge, crv, beta, n, vals, cache):
     """Shoot at ``vals``; ``cache`` = (lc, rho_a, yc[4]) of the last contact field. NaN out: outside."""
     lc, rho_a, alpha, p = vals[1], max(vals[2], 0.0), vals[3], vals[0]
@@ -44,7 +44,7 @@ def shot_vals(edge, crv, beta, n, vals, cache):
     return o
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _residual(o, res, tg):
     out = np.empty(res.shape[0])
     for i in range(res.shape[0]):
@@ -60,7 +60,7 @@ def _residual(o, res, tg):
     return out
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _at(edge, crv, beta, n, vals, unk, x, cache):
     v = vals.copy()
     for i in range(unk.shape[0]):
@@ -68,7 +68,7 @@ def _at(edge, crv, beta, n, vals, unk, x, cache):
     return shot_vals(edge, crv, beta, n, v, cache)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _lin_solve(J, b):
     """Gaussian elimination with partial pivoting (k <= 3); ok False for a singular matrix."""
     k = b.shape[0]
@@ -98,7 +98,7 @@ def _lin_solve(J, b):
     return y, True
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r0, cache):
     k = x.shape[0]
     J = np.empty((r0.shape[0], k))
@@ -117,7 +117,7 @@ def _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r0, cache):
     return J, True
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _line_search(edge, crv, beta, n, vals, unk, res, tg, x, dx, nrm, cache):
     lam = 1.0
     while lam > 1e-4:
@@ -131,7 +131,7 @@ def _line_search(edge, crv, beta, n, vals, unk, res, tg, x, dx, nrm, cache):
     return x, np.full(K.N_OUT, np.nan), np.full(res.shape[0], np.nan), False
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def newton_packed(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     """``newton`` with its results in one array (status, shots, x[k], out[N_OUT], J[k*k]): one array
     to hand back to Python instead of three."""
@@ -145,7 +145,7 @@ def newton_packed(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter)
     return out
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     """Solve the residuals for the unknowns from ``x0``; ``J0`` a Jacobian to start from (NaN: none).
 
@@ -195,7 +195,7 @@ def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     return NO_CONV, x, o, J, cache[6]
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def free_newton(q, beta, n, x, slope):
     """Apex stretch of free inflation at pressure q from a close guess ``x``: secant iterations from
     the slope ``slope`` of r(beta) in lc (NaN: a difference quotient). Returns (lc, slope, y) with y
