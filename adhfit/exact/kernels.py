@@ -63,17 +63,17 @@ def _field(rho, r, l1, c):
 
 @jit
 def _rhs(kind, rho, y, par, out):
-    if kind == FREE:
-        r, th, l1 = y[0], y[2], y[3]
-        c = math.cos(th)
-        s = math.sin(th)
+    if kind == FREE:  # y = (r, z, cos theta, sin theta, lambda1, u, v): no sin/cos per evaluation
+        r, c, s, l1 = y[0], y[2], y[3], y[4]
         dl1, ir, t1, t2, e = _field(rho, r, l1, c)
+        k = l1 * (2.0 * par - t2 * s * ir) / t1
         out[0] = l1 * c
         out[1] = l1 * s
-        out[2] = l1 * (2.0 * par - t2 * s * ir) / t1
-        out[3] = dl1
-        out[4] = e
-        out[5] = math.pi * r * r * l1 * s
+        out[2] = -s * k
+        out[3] = c * k
+        out[4] = dl1
+        out[5] = e
+        out[6] = math.pi * r * r * l1 * s
     else:
         r, l1 = y[0], y[1]
         s = -r * par
@@ -138,8 +138,10 @@ def integrate(kind, y0, rho1, rho2, eps, n, par, A, B, C):
     if rho2 == rho1:
         return y
     K = math.asinh((rho2 - rho1) / eps)
-    if kind == FREE:
-        _steps(FREE, y, rho1, eps, K, n, par, 6)
+    if kind == FREE:  # the angle as its cosine and sine while integrating
+        w = np.array([y[0], y[1], math.cos(y[2]), math.sin(y[2]), y[3], y[4], y[5]])
+        _steps(FREE, w, rho1, eps, K, n, par, 7)
+        y[0], y[1], y[2], y[3], y[4], y[5] = w[0], w[1], math.atan2(w[3], w[2]), w[4], w[5], w[6]
     else:
         _steps(CONTACT, y, rho1, eps, K, n, par, 4)
     return y
