@@ -38,9 +38,9 @@ def _split(points):
 
 
 def _predict(v, vs, xs, x0):
-    """Lagrange extrapolation through the last (up to) four solved states (cubic: ~10 % fewer shots
-    than quadratic on the base cases)."""
-    k = min(len(xs), 4)
+    """Lagrange extrapolation through the last (up to) six solved states (quintic: ~20 % fewer shots
+    than cubic on the base cases at lambda0 = 1.5; a failed step is split by ``march``)."""
+    k = min(len(xs), 6)
     if k == 0:
         return list(x0)
     if len(set(vs[-k:])) < k:
