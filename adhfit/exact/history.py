@@ -5,7 +5,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
 from .control import Control, prepare
@@ -176,22 +176,44 @@ def _delamination(cfg, c, m, on):
     return states, stage
 
 
+def _vertex(x, y, c, h):
+    """The minimum of the polynomial through (x, y) nearest the centre c (scale h); None if none
+    lies within 2.5 h."""
+    t = (np.asarray(x) - c) / h
+    poly = np.polynomial.Polynomial.fit(t, np.asarray(y), len(t) - 1, domain=[-1, 1], window=[-1, 1])
+    dp, d2 = poly.deriv(), poly.deriv(2)
+    roots = [r.real for r in dp.roots() if abs(r.imag) < 1e-12 and abs(r.real) <= 2.5 and d2(r.real) > 0]
+    return c + h * min(roots, key=abs) if roots else None
+
+
 def _extremum(stage, states, key, sign):
-    """Refine the extremum of sign*key over the delamination path by a bounded Brent search."""
+    """Refine the minimum of sign*key over the delamination path: the vertex of the polynomial through
+    the (up to) five rows around the least row, then of the quartic through five states solved to
+    1e-14 on a stencil of a tenth of the row spacing around it (the objective is flat there: its
+    derivative, not its value, locates the minimum)."""
     vals = [sign * key(s) for s in states]
     i = int(np.argmin(vals))
     if i == 0 or i == len(states) - 1:
         return states[i]
     lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
-    cache = {}
-
-    def fun(r):
-        st = stage.solve(r, stage.x(states[i]), tol=1e-14)  # a smooth objective: the extremum is flat
-        cache[r] = st
-        return sign * key(st)
-
-    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-11 * hi})
-    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i]), tol=1e-14)
+    j0, j1 = max(0, i - 2), min(len(states), i + 3)
+    h = 0.05 * (hi - lo)
+    c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
+    c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
+    near = states[i]
+    for _ in range(3):
+        pts = []
+        for r in c + h * np.array([0.0, -1.0, -2.0, 1.0, 2.0]):
+            near = stage.solve(r, stage.x(near if not pts else pts[0]), tol=1e-14)
+            pts.append(near)
+        v = _vertex([st.rho_a for st in pts], [sign * key(st) for st in pts], c, h)
+        if v is None:
+            break
+        if abs(v - c) <= 1.5 * h:
+            return stage.solve(v, stage.x(pts[0]), tol=1e-14)
+        c = min(max(v, lo + 2 * h), hi - 2 * h)
+    best = min(pts + [states[i]], key=lambda st: sign * key(st))
+    return best
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
