@@ -117,26 +117,41 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
     return [free] + states, states[-1]
 
 
-def _onset(cfg, c, m):
-    """Bracket G = w along pinning (steps in alpha, halved where a step fails), then solve it."""
-    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
-    top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
-    prev, prev_a, step = m, 0.0, 0.04
+def _bracket(pin, c, m, top):
+    """Steps in alpha along pinning from the loading end ``m`` until G >= w: (last state below w, its
+    alpha, first state at or above w, its alpha). Each step aims 3 % past where G ~ alpha^2 reaches w
+    (at most 4 times the last step; once a step has failed, steps only halve)."""
+    prev, prev_a, step, grow = m, 0.0, 0.04, True
+    vs, xs = [0.0], [pin.x(m)]
     while True:
         alpha = prev_a + step
+        if alpha >= top and step > 0.04:
+            step, grow = 0.04, False
+            continue
         if alpha >= top or step < 1e-9:
             raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
                                    "(the clamp turning past vertical, or the contact region going slack: "
                                    "stretch -> 1, outside a membrane model)",
                                    {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
         try:
-            st = pin.solve(alpha, pin.x(prev))
+            st = pin.solve(alpha, _predict(alpha, vs, xs, pin.x(prev)))
         except ConvergenceError:
-            step *= 0.5
+            step, grow = 0.5 * step, False
             continue
         if st.G >= c.w:
-            break
+            return prev, prev_a, st, alpha
+        if grow and st.G > 0.0:
+            step = min(max(1.03 * alpha * math.sqrt(c.w / st.G) - alpha, step), 4.0 * step)
         prev, prev_a = st, alpha
+        vs.append(alpha)
+        xs.append(pin.x(st))
+
+
+def _onset(cfg, c, m):
+    """Bracket G = w along pinning (``_bracket``), then solve it."""
+    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
+    prev, prev_a, st, alpha = _bracket(pin, c, m, top)
     on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     t = (c.w - prev.G) / (st.G - prev.G)
     guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
