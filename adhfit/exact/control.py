@@ -8,7 +8,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
-from .inflation import free_inflation
+from .inflation import free_curve, free_inflation
 from .state import State
 
 __all__ = ["Control", "prepare"]
@@ -52,28 +52,37 @@ class Control:
             return math.nan
 
     def deltas(self, states: list) -> np.ndarray:
-        """``delta`` of every state. Under pressure control d0(p) is interpolated (barycentric, on
-        Chebyshev points over the states' range of p: ``D0_NODES`` free inflations instead of one per
-        row); the interpolant is checked against direct solves at the rows nearest the ends and the middle of that range and replaced by
-        one solve per row where they differ by more than ``D0_CHECK`` (or a node is outside Case I)."""
+        """``delta`` of every state. Under pressure control d0(p) comes from ``free_curve`` (free
+        inflation at a few stretches, interpolated), checked against direct solves at the rows nearest
+        the ends and the middle of the rows' range of p, and replaced by one solve per row where they
+        differ by more than ``D0_CHECK`` (or the curve leaves Case I)."""
         d = np.array([st.d for st in states], dtype=float)
         if self.control == "displacement":
             return self.free.d - d
         p = np.array([st.p for st in states], dtype=float)
-        lo, hi = float(p.min()), float(p.max())
-        d0 = None
-        if hi - lo > 1e-12 * max(1.0, abs(hi)):
-            x = 0.5 * (lo + hi) + 0.5 * (hi - lo) * np.cos(np.pi * np.arange(D0_NODES) / (D0_NODES - 1))
-            y = np.array([self.delta(_AtP(q, 0.0)) for q in x])
-            if np.all(np.isfinite(y)):
-                d0 = _barycentric(x, y, p)
-                mids = (0.5 * (x[0] + x[1]), 0.5 * (x[-2] + x[-1]), 0.5 * (lo + hi))
-                picks = [int(np.argmin(np.abs(p - q))) for q in mids]
-                if any(not abs(d0[i] - self.delta(_AtP(p[i], 0.0))) <= D0_CHECK for i in picks):
-                    d0 = None
+        d0 = self._d0_curve(p)
         if d0 is None:
             d0 = np.array([self.delta(_AtP(q, 0.0)) for q in p])
         return d0 - d
+
+    def _d0_curve(self, p: np.ndarray) -> np.ndarray | None:
+        lo, hi = int(np.argmin(p)), int(np.argmax(p))
+        if not p[hi] - p[lo] > 1e-9:
+            return None
+        try:
+            ends = [free_inflation(p[i], self.lambda0, self.n, self._guess(abs(p[i])), self._memo)
+                    for i in (hi, lo)]
+        except ConvergenceError:
+            return None
+        d0 = free_curve(p, ends, self.lambda0, self.n)
+        if d0 is None:
+            return None
+        mids = np.sort(p)[[len(p) // 20, len(p) // 2, len(p) - 1 - len(p) // 20]]
+        for q in mids:
+            i = int(np.argmin(np.abs(p - q)))
+            if not abs(d0[i] - self.delta(_AtP(p[i], 0.0))) <= D0_CHECK:
+                return None
+        return d0
 
     def _guess(self, q: float) -> float | None:
         """Apex stretch of free inflation at |p| = q, extrapolated from the last (up to 3) solved."""
@@ -97,8 +106,7 @@ class Control:
                 "membrane": "exact"}
 
 
-D0_NODES = 24  # Chebyshev points for d0(p) under pressure control (~1e-13 on the base cases)
-D0_CHECK = 1e-11  # largest accepted difference of the interpolated d0 from a direct solve
+D0_CHECK = 1e-10  # largest accepted difference of the interpolated d0 from a direct solve
 
 
 @dataclass
@@ -107,21 +115,6 @@ class _AtP:
 
     p: float
     d: float
-
-
-def _barycentric(x: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The polynomial through (x, y) on Chebyshev-Lobatto points x, evaluated at t (barycentric)."""
-    w = (-1.0) ** np.arange(x.size)
-    w[0] *= 0.5
-    w[-1] *= 0.5
-    diff = t[:, None] - x[None, :]
-    exact = diff == 0.0
-    diff[exact] = 1.0
-    c = w / diff
-    out = (c @ y) / c.sum(axis=1)
-    hit = exact.any(axis=1)
-    out[hit] = y[np.argmax(exact[hit], axis=1)]
-    return out
 
 
 def _check(name, value, lo, hi, valid, *, lo_open=True, hi_open=True):
