@@ -9,6 +9,7 @@ from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
 from .control import Control, prepare
+from .march import PREDICT
 from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
@@ -40,7 +41,7 @@ def _split(points):
 def _predict(v, vs, xs, x0):
     """Lagrange extrapolation through the last (up to) six solved states (quintic: ~20 % fewer shots
     than cubic on the base cases at lambda0 = 1.5; a failed step is split by ``march``)."""
-    k = min(len(xs), 6)
+    k = min(len(xs), PREDICT)
     if k == 0:
         return list(x0)
     if len(set(vs[-k:])) < k:
@@ -58,12 +59,21 @@ def _predict(v, vs, xs, x0):
 def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) -> list:
     """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
     predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
-    (a fold the parameter cannot pass) returns the states solved up to there instead of raising."""
+    (a fold the parameter cannot pass) returns the states solved up to there instead of raising.
+    Runs of rows are solved in one compiled call (``Stage.path``); a row that fails there is retried
+    here (its error, or the split)."""
     out, xs, vs = [], [], []
-    for v in values:
-        guess = _predict(v, vs, xs, x0)
+    values = list(values)
+    while len(vs) < len(values):
+        for st in stage.path(values[len(vs):], vs[-PREDICT:], xs[-PREDICT:], x0):
+            out.append(st)
+            xs.append(stage.x(st))
+            vs.append(values[len(vs)])
+        if len(vs) == len(values):
+            break
+        v = values[len(vs)]
         try:
-            st = stage.solve(v, guess)
+            st = stage.solve(v, _predict(v, vs, xs, x0))
         except ConvergenceError:
             if depth >= 12 or not vs:
                 if stop_ok:
@@ -211,6 +221,8 @@ def _extremum(stage, states, key, sign):
     if i == 0 or i == len(states) - 1:
         return states[i]
     lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
+    if not hi > lo:
+        return states[i]
     j0, j1 = max(0, i - 2), min(len(states), i + 3)
     h = 0.05 * (hi - lo)
     c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
