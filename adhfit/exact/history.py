@@ -227,20 +227,21 @@ def _extremum(stage, states, key, sign):
     h = 0.05 * (hi - lo)
     c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
     c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
-    near = states[i]
+    vs, xs = [st.rho_a for st in states[j0:j1]][::-1], [stage.x(st) for st in states[j0:j1]][::-1]
+    pts = []
     for _ in range(3):
-        pts = []
-        for r in c + h * np.array([0.0, -1.0, -2.0, 1.0, 2.0]):
-            near = stage.solve(r, stage.x(near if not pts else pts[0]), tol=1e-14)
-            pts.append(near)
-        v = _vertex([st.rho_a for st in pts], [sign * key(st) for st in pts], c, h)
+        grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
+        pts = stage.path(grid, vs, xs, xs[-1], tol=1e-14)
+        if len(pts) < len(grid):
+            break
+        v = _vertex(grid, [sign * key(st) for st in pts], c, h)
         if v is None:
             break
         if abs(v - c) <= 1.5 * h:
-            return stage.solve(v, stage.x(pts[0]), tol=1e-14)
+            fin = stage.path([v], grid, [stage.x(st) for st in pts], xs[-1], tol=1e-14)
+            return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=1e-14)
         c = min(max(v, lo + 2 * h), hi - 2 * h)
-    best = min(pts + [states[i]], key=lambda st: sign * key(st))
-    return best
+    return min(pts + [states[i]], key=lambda st: sign * key(st))
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,

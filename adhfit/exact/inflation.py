@@ -125,6 +125,9 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     D = Chebyshev.fit(u, dn, nodes - 1, domain=[u_lo, u_hi])
     dP = P.deriv()
     t = np.interp(p, pn[::-1], u[::-1])
-    for _ in range(8):
-        t = t - (P(t) - p) / dP(t)
+    for _ in range(8):  # Newton from the piecewise-linear inverse: quadratic, 3-4 steps
+        step = (P(t) - p) / dP(t)
+        t = t - step
+        if not np.max(np.abs(step)) > 1e-15 * (u_hi - u_lo):
+            break
     return D(t)

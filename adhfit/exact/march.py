@@ -47,7 +47,7 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
                max_iter):
     """Solve the stage at each of ``values`` (the parameter: ``vals[pidx]``, or ``tg[pidx]`` when
     ``in_tg``) continuing from the solved history (``vs0``, ``xs0``). Returns (rows solved, per row
-    the unknowns then the N_OUT observables, the last Jacobian)."""
+    the unknowns then the N_OUT observables, the last Jacobian, shots taken)."""
     m, k, h = values.shape[0], unk.shape[0], vs0.shape[0]
     vs = np.empty(h + m)
     xs = np.empty((h + m, k))
@@ -55,6 +55,7 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
     xs[:h] = xs0
     rows = np.full((m, k + K.N_OUT), np.nan)
     J = J0.copy()
+    total = 0.0
     for i in range(m):
         v = values[i]
         vv, tt = vals.copy(), tg.copy()
@@ -63,11 +64,12 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
         else:
             vv[pidx] = v
         guess = predict(v, vs, xs, h + i, x0)
-        status, x, o, J, _ = N.newton(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol, max_iter)
+        status, x, o, J, shots = N.newton(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol, max_iter)
+        total += shots
         if status != N.OK or not o[2] < 0.5 * math.pi:
-            return i, rows, J
+            return i, rows, J, total
         vs[h + i] = v
         xs[h + i] = x
         rows[i, :k] = x
         rows[i, k:] = o
-    return m, rows, J
+    return m, rows, J, total

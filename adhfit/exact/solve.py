@@ -52,6 +52,7 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
     status = int(out[0])
     J = out[2 + k + K.N_OUT:].reshape(len(res), k)
     memo["J"] = None if np.isnan(J[0, 0]) else J
+    memo["shots"] = memo.get("shots", 0) + int(out[1])
     if status != N.OK:
         raise ConvergenceError("exact membrane: " + _WHY[status],
                                {**fixed, **targets, "lambda0": cfg.lambda0})
@@ -70,10 +71,11 @@ def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: 
     pidx = ("a", "d", "w").index(param) if in_tg else _KEYS.index(param)
     k = len(unknowns)
     hist = np.asarray(xs, dtype=float).reshape(len(vs), k)
-    done, rows, J = M.march_rows(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, in_tg, pidx,
+    done, rows, J, shots = M.march_rows(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, in_tg, pidx,
                                  np.asarray(values, dtype=float), np.asarray(vs, dtype=float), hist,
                                  np.asarray(x0, dtype=float), J, tol, max_iter)
     memo["J"] = None if np.isnan(J[0, 0]) else J
+    memo["shots"] = memo.get("shots", 0) + int(shots)
     out = []
     for i in range(done):
         if not in_tg:

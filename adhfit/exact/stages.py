@@ -48,12 +48,12 @@ class Stage:
                                    {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
         return st
 
-    def path(self, values, vs: list, xs: list, x0) -> list:
+    def path(self, values, vs: list, xs: list, x0, tol: float = 1e-10) -> list:
         """The states at each of ``values`` in one compiled call, continuing from the solved
         parameters ``vs`` and unknowns ``xs`` (``x0`` when there are none): the states solved before
         the first failure (including a state past vertical at the clamp, which ``solve`` reports)."""
         return solve_path(self.cfg, self.edge, self.fixed, self.unknowns, self.residuals, self.targets,
-                          self.param, values, vs, xs, x0, memo=self.memo)
+                          self.param, values, vs, xs, x0, memo=self.memo, tol=tol)
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""
