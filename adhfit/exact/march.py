@@ -56,6 +56,7 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
     rows = np.full((m, k + K.N_OUT), np.nan)
     J = J0.copy()
     total = 0.0
+    cache = np.full(7, np.nan)
     for i in range(m):
         v = values[i]
         vv, tt = vals.copy(), tg.copy()
@@ -64,7 +65,8 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
         else:
             vv[pidx] = v
         guess = predict(v, vs, xs, h + i, x0)
-        status, x, o, J, shots = N.newton(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol, max_iter)
+        status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol,
+                                                  max_iter, cache)
         total += shots
         if status != N.OK or not o[2] < 0.5 * math.pi:
             return i, rows, J, total

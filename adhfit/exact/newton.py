@@ -153,6 +153,13 @@ def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     and ``shots`` the number of shots taken.
     """
     cache = np.full(7, np.nan)
+    return newton_cached(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter, cache)
+
+
+@jit
+def newton_cached(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter, cache):
+    """``newton`` with the contact field's cache (see ``shot_vals``) kept by the caller: a no-slip
+    pinning march reuses one contact field for all its rows."""
     cache[6] = 0.0
     x = x0.copy()
     o = _at(edge, crv, beta, n, vals, unk, x, cache)
