@@ -183,3 +183,33 @@ def test_strong_adhesion_and_domain_limits():
     from adhfit.errors import ConvergenceError
     with pytest.raises(ConvergenceError, match="slack"):
         exact_history("pressure", "frictionless", d=0.2, w=5.0, rs=0.5, a_max=0.25, lambda0=1.2, points=20)
+
+
+@pytest.mark.parametrize("control, slip, kw", [("displacement", "frictionless", dict(p=0.6)),
+                                               ("pressure", "no-slip", dict(d=0.2))])
+def test_rows_and_extrema_are_solved_states(control, slip, kw):
+    """Rows of the compiled continuation re-solved one by one (Newton from a perturbed start, residuals
+    to 1e-13) agree with the rows; the refined f_min is a minimum of f along delamination (states
+    solved 1e-4 either side have a larger f); pressure control's delta column (interpolated d0(p))
+    agrees with one free-inflation solve per row."""
+    from adhfit.exact.inflation import free_inflation
+    lam0 = 1.5
+    h = exact_history(control, slip, lambda0=lam0, points=60, w=0.2, rs=0.5, a_max=0.25, **kw)
+    stg = h.columns["stage"]
+    m = [s for s, st in zip(h.states, stg) if st == "making_contact"][-1]
+    stage = delamination(Config(lam0, 2.0), control, slip, m, 0.2, kw.get("p"), kw.get("d"))
+    dl = [i for i, st in enumerate(stg) if st == "delamination"]
+    for i in dl[::7]:
+        s = h.states[i]
+        t = stage.solve(s.rho_a, [1.0001 * x for x in stage.x(s)], tol=1e-13)
+        assert (t.f, t.d, t.a, t.p, t.G) == pytest.approx((s.f, s.d, s.a, s.p, s.G), abs=1e-9)
+    fmin = h.summary["f_min"]
+    j = int(np.argmin(np.abs(h.columns["f"] - fmin["f"])))
+    rho = h.states[j].rho_a
+    for dr in (1e-4, -1e-4):
+        t = stage.solve(rho + dr, stage.x(h.states[j]), tol=1e-13)
+        assert t.f > fmin["f"]
+    if control == "pressure":
+        for i in range(0, len(h.states), 9):
+            s = h.states[i]
+            assert h.columns["delta"][i] == pytest.approx(free_inflation(s.p, lam0).d - s.d, abs=1e-10)
