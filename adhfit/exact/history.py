@@ -202,13 +202,21 @@ def _delamination(cfg, c, m, on):
 
 
 def _vertex(x, y, c, h):
-    """The minimum of the polynomial through (x, y) nearest the centre c (scale h); None if none
-    lies within 2.5 h."""
-    t = (np.asarray(x) - c) / h
-    poly = np.polynomial.Polynomial.fit(t, np.asarray(y), len(t) - 1, domain=[-1, 1], window=[-1, 1])
-    dp, d2 = poly.deriv(), poly.deriv(2)
-    roots = [r.real for r in dp.roots() if abs(r.imag) < 1e-12 and abs(r.real) <= 2.5 and d2(r.real) > 0]
-    return c + h * min(roots, key=abs) if roots else None
+    """The minimum of the polynomial through (x, y) nearest the centre c (scale h): Newton on its
+    derivative from the least sample; None if it does not converge within 2.5 h of c."""
+    t = (np.asarray(x, dtype=float) - c) / h
+    coef = np.linalg.solve(np.vander(t), np.asarray(y, dtype=float))
+    d1 = np.polyder(coef)
+    d2 = np.polyder(d1)
+    r = t[int(np.argmin(y))]
+    for _ in range(30):
+        step = np.polyval(d1, r) / np.polyval(d2, r)
+        r -= step
+        if not abs(r) <= 2.5:
+            return None
+        if abs(step) < 1e-13:
+            return c + h * r if np.polyval(d2, r) > 0.0 else None
+    return None
 
 
 def _extremum(stage, states, key, sign):
