@@ -169,6 +169,7 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
         _check("p_max", p_max, free.p, 1e3, f"a float above the touching pressure {free.p:.6g}")
     c = Control(control, slip, p, d, w, rs, lambda0, a_max, int(points), n, free)
     c.end = ends[0]
+    c._seen = [(abs(free.p), free.lc)]  # d0(p) continuation starts from the free state
     c.n_mc = max(4, round(0.3 * points))
     c.n_pin = max(4, round(0.2 * points))
     c.n_del = max(5, points - c.n_mc - c.n_pin + 2)

@@ -114,11 +114,10 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     """
     u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
     u = 0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * np.cos(np.pi * np.arange(nodes) / (nodes - 1))
-    out = N.free_at_stretches(lambda0 + u * u, 1.0 / lambda0, n, ends[0].p ** 2)
+    out = N.free_at_stretches(u, lambda0, 1.0 / lambda0, n, ends[0].p)
     if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
         return None
-    sgn = np.sign(u)
-    pn, dn = sgn * np.sqrt(out[0]), sgn * out[1]
+    pn, dn = out[0], np.sign(u) * out[1]
     if not np.all(np.diff(pn) < 0.0):
         return None
     P = Chebyshev.fit(u, pn, nodes - 1, domain=[u_lo, u_hi])

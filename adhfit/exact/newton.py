@@ -228,9 +228,9 @@ def free_newton(q, beta, n, x, slope):
 
 
 @jit
-def _extrapolate(xs, ys, i, x):
-    """Lagrange extrapolation to x through the (up to) three points before index i."""
-    k = min(i, 3)
+def _extrapolate(xs, ys, i, x, order):
+    """Lagrange extrapolation to x through the (up to) ``order`` points before index i."""
+    k = min(i, order)
     out = 0.0
     for a in range(i - k, i):
         w = 1.0
@@ -242,26 +242,27 @@ def _extrapolate(xs, ys, i, x):
 
 
 @jit
-def free_at_stretches(lcs, beta, n, s_start):
-    """Free inflation at given apex stretches: for each lc of ``lcs`` (in order, continuation) the
-    squared pressure s = p^2 with r(beta) = 1, by secant iterations in s (r(beta) is linear in p^2 near
-    p = 0, so this is well conditioned down to lc = lambda0), the first step with the last slope.
-    Returns (s, d0, theta_end) per stretch; NaN from the first that fails."""
-    m = lcs.shape[0]
+def free_at_stretches(us, lambda0, beta, n, p_start):
+    """Free inflation at the apex stretches lc = lambda0 + u^2 for u in ``us`` (in order: continuation),
+    u carrying the sign of p: the pressure with r(beta) = 1 by secant iterations in s = p^2 (r(beta) is
+    linear in p^2 near p = 0, so this is well conditioned down to lc = lambda0), started from p and the
+    slope extrapolated in u from the nodes before. Returns (p, d0, theta_end) per node (d0, theta_end
+    for |p|); NaN from the first node that fails."""
+    m = us.shape[0]
     out = np.full((3, m), np.nan)
-    slope = np.nan
+    slopes = np.full(m, np.nan)
     for i in range(m):
-        s0 = _extrapolate(lcs, out[0], i, lcs[i]) if i > 0 else s_start
-        if not math.isfinite(s0):
-            return out
-        s0 = max(s0, 0.0)
-        y = K.from_apex(K.FREE, lcs[i], beta, n, math.sqrt(s0), K.A, K.B, K.C)
+        lc = lambda0 + us[i] * us[i]
+        q = abs(_extrapolate(us, out[0], i, us[i], 4)) if i > 0 else abs(p_start)
+        slope = _extrapolate(us, slopes, i, us[i], 2) if i > 0 else np.nan
+        s0 = q * q
+        y = K.from_apex(K.FREE, lc, beta, n, q, K.A, K.B, K.C)
         f0 = y[0] - 1.0
         s1 = s0 - f0 / slope if math.isfinite(slope) and slope < 0.0 else s0 * (1.0 + 1e-6) + 1e-12
         for _ in range(30):
             if abs(f0) < 1e-14 or s1 == s0:
                 break
-            y1 = K.from_apex(K.FREE, lcs[i], beta, n, math.sqrt(max(s1, 0.0)), K.A, K.B, K.C)
+            y1 = K.from_apex(K.FREE, lc, beta, n, math.sqrt(max(s1, 0.0)), K.A, K.B, K.C)
             f1 = y1[0] - 1.0
             if not math.isfinite(f1) or f1 == f0:
                 return out
@@ -269,5 +270,6 @@ def free_at_stretches(lcs, beta, n, s_start):
             s0, s1, f0, y = s1, max(s1 - f1 / slope, 0.0), f1, y1
         if not abs(f0) < 1e-13:
             return out
-        out[0, i], out[1, i], out[2, i] = s0, y[1], y[2]
+        slopes[i] = slope
+        out[0, i], out[1, i], out[2, i] = math.copysign(math.sqrt(s0), us[i]), y[1], y[2]
     return out
