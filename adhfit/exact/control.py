@@ -34,6 +34,7 @@ class Control:
     n_del: int = 0
     _seen: list = field(default_factory=list)  # (|p|, apex stretch) of the last d0(p): continuation
     _memo: dict = field(default_factory=dict)  # slope of the free-inflation secant iterations
+    _d0: dict = field(default_factory=dict)  # d0 by pressure, as solved
     end: tuple = ("a_max", None)  # the loading end as given
 
     @property
@@ -44,12 +45,14 @@ class Control:
         """delta = d0(p) - d with the exact free-inflation deflection (NaN without a Case I d0)."""
         if self.control == "displacement":
             return self.free.d - st.d
-        try:
-            fi = free_inflation(st.p, self.lambda0, self.n, self._guess(abs(st.p)), self._memo)
-            self._seen = (self._seen + [(abs(st.p), fi.lc)])[-3:]
-            return fi.d - st.d
-        except ConvergenceError:
-            return math.nan
+        if st.p not in self._d0:  # one value per pressure (onset, f_min, turning point may coincide)
+            try:
+                fi = free_inflation(st.p, self.lambda0, self.n, self._guess(abs(st.p)), self._memo)
+                self._seen = (self._seen + [(abs(st.p), fi.lc)])[-3:]
+                self._d0[st.p] = fi.d
+            except ConvergenceError:
+                self._d0[st.p] = math.nan
+        return self._d0[st.p] - st.d
 
     def deltas(self, states: list) -> np.ndarray:
         """``delta`` of every state. Under pressure control d0(p) comes from ``free_curve`` (free

@@ -130,7 +130,8 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
 def _bracket(pin, c, m, top):
     """Steps in alpha along pinning from the loading end ``m`` until G >= w: (last state below w, its
     alpha, first state at or above w, its alpha). Each step aims 3 % past where G ~ alpha^2 reaches w
-    (at most 4 times the last step; once a step has failed, steps only halve)."""
+    (at most 4 times the last step and 0.3; a step longer than the old fixed 0.04 that fails or
+    finds G falling is halved, and steps no longer grow)."""
     prev, prev_a, step, grow = m, 0.0, 0.04, True
     vs, xs = [0.0], [pin.x(m)]
     while True:
@@ -148,10 +149,13 @@ def _bracket(pin, c, m, top):
         except ConvergenceError:
             step, grow = 0.5 * step, False
             continue
+        if step > 0.04 and st.G < prev.G:  # a long step past a fold, or onto another branch: shorten
+            step, grow = 0.5 * step, False
+            continue
         if st.G >= c.w:
             return prev, prev_a, st, alpha
         if grow and st.G > 0.0:
-            step = min(max(1.03 * alpha * math.sqrt(c.w / st.G) - alpha, step), 4.0 * step)
+            step = min(max(1.03 * alpha * math.sqrt(c.w / st.G) - alpha, step), 4.0 * step, 0.3)
         prev, prev_a = st, alpha
         vs.append(alpha)
         xs.append(pin.x(st))

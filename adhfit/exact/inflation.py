@@ -84,7 +84,13 @@ def _bracketed(resid, lambda0, p):
         lo, hi = hi, hi * 1.2
         if hi > 1e3 * lambda0:
             raise ConvergenceError("exact free inflation", {"p": p, "lambda0": lambda0})
-    return brentq(resid, lo, hi, xtol=1e-15, rtol=1e-15)
+
+    def finite(lc):  # the shot leaves the domain inside the bracket: no Case I state found
+        r = resid(lc)
+        if not math.isfinite(r):
+            raise ConvergenceError("exact free inflation: no Case I state", {"p": p, "lambda0": lambda0})
+        return r
+    return brentq(finite, lo, hi, xtol=1e-15, rtol=1e-15)
 
 
 def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
