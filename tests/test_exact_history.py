@@ -213,3 +213,18 @@ def test_rows_and_extrema_are_solved_states(control, slip, kw):
         for i in range(0, len(h.states), 9):
             s = h.states[i]
             assert h.columns["delta"][i] == pytest.approx(free_inflation(s.p, lam0).d - s.d, abs=1e-10)
+
+
+def test_onset_when_g_rises_slowly_along_pinning():
+    """No slip, pressure control, lambda0 = 1.1, w = 1: G climbs to w only near alpha ~ 1.5 and the
+    pinning branch continues past it onto states with G ~ 0.06 (a long alpha step can land there).
+    The onset must be the first G = w: G rises along the pinning rows, and the onset state re-shot by
+    the independent solver closes at the clamp with G = w and the row's gap."""
+    h = exact_history("pressure", "no-slip", d=-0.05, w=1.0, rs=0.5, a_max=0.25, lambda0=1.1, points=30)
+    stg = h.columns["stage"]
+    g = h.columns["G"][stg == "pinning"]
+    assert np.all(np.diff(g) > 0) and g[-1] == pytest.approx(1.0, abs=1e-10)
+    m = [s for s, st in zip(h.states, stg) if st == "making_contact"][-1]
+    on = [s for s, st in zip(h.states, stg) if st == "pinning"][-1]
+    r_end, d, f, G = ref.edge_state(on.p, 1.1, 0.5, m.lc, on.rho_a, on.alpha, "given", on.l1p)
+    assert (r_end, d, f, G) == pytest.approx((1.0, -0.05, on.f, 1.0), abs=1e-8)
