@@ -4,10 +4,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.polynomial import Chebyshev
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError
+from . import chebyshev as CH
 from . import kernels as K
 from . import newton as N
 from .state import DEFAULT_N, Config, State, evaluate
@@ -100,7 +100,8 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     Parametrized by u = sign(p) sqrt(lc - lambda0) (lc the apex stretch), in which p and d0 are smooth
     from p = 0 through the pressure maximum of free inflation (d0(p) itself has a square-root branch
     point there, so a polynomial in p would converge slowly): p(u) and d0(u) are interpolated on
-    Chebyshev points between the ends, and p(u) = p is inverted by Newton on the interpolant.
+    Chebyshev points between the ends (``chebyshev``), and p(u) = p is inverted by Newton on the
+    interpolant.
 
     Parameters
     ----------
@@ -126,13 +127,6 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     pn, dn = out[0], np.sign(u) * out[1]
     if not np.all(np.diff(pn) < 0.0):
         return None
-    P = Chebyshev.fit(u, pn, nodes - 1, domain=[u_lo, u_hi])
-    D = Chebyshev.fit(u, dn, nodes - 1, domain=[u_lo, u_hi])
-    dP = P.deriv()
-    t = np.interp(p, pn[::-1], u[::-1])
-    for _ in range(8):  # Newton from the piecewise-linear inverse: quadratic, 3-4 steps
-        step = (P(t) - p) / dP(t)
-        t = t - step
-        if not np.max(np.abs(step)) > 1e-15 * (u_hi - u_lo):
-            break
-    return D(t)
+    x0 = (np.interp(p, pn[::-1], u[::-1]) - 0.5 * (u_lo + u_hi)) / (0.5 * (u_hi - u_lo))
+    d0 = CH.invert(pn, dn, np.asarray(p, dtype=float), x0)
+    return d0 if np.all(np.isfinite(d0)) else None
