@@ -107,10 +107,8 @@ def _steps(kind, y, rho1, eps, K, n, par, m):
     for j in range(12):  # sinh/cosh of K (s0 + C_j h) by the addition theorems
         sc[j] = math.sinh(K * C[j] * h)
         cc[j] = math.cosh(K * C[j] * h)
-    s0, c0 = 0.0, 1.0  # sinh, cosh of K s at the step start: advanced by the addition theorem (C[11] = 1)
     for i in range(n):
-        if i > 0:
-            s0, c0 = s0 * cc[11] + c0 * sc[11], c0 * cc[11] + s0 * sc[11]
+        s0, c0 = math.sinh(K * i * h), math.cosh(K * i * h)
         for j in range(12):
             for q in range(m):
                 yt[q] = y[q]
