@@ -15,6 +15,7 @@ from .state import DEFAULT_N, Config, State
 
 __all__ = ["ExactHistory", "exact_history", "COLUMNS"]
 
+END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 
 
@@ -93,27 +94,53 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) ->
 
 
 def _loading_end(stage: Stage, c: Control) -> float:
-    """a_max from delta_max or p_max: march the loading in a, then solve the end condition."""
+    """a_max from delta_max or p_max: march the loading in a (a geometric grid, runs of 8 in one
+    compiled call), then solve the end condition between the grid values that bracket it."""
     name, target = c.end
     value = (lambda s: c.free.d - s.d) if name == "delta_max" else (lambda s: s.p)
     cap = 0.95 * min(1.0, c.rs)
-    a_prev, st_prev = 0.0, c.free
-    x = [c.free.lc, 1e-3 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
-    for a in np.geomspace(1e-3 * cap, cap, 60):
-        try:
-            st = march(stage, [a], x)[-1]
-        except ConvergenceError:
-            break
-        if value(st) >= target:
-            if a_prev == 0.0:
-                raise InputError(name, target, "a value reached by a contact radius above 1e-3 a_max")
+    grid = list(np.geomspace(1e-3 * cap, cap, 60))
+    x0 = [c.free.lc, 1e-3 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
+    vs, xs, sts = [], [], []
+    while len(vs) < len(grid):
+        got = stage.path(grid[len(vs):len(vs) + 8], vs[-PREDICT:], xs[-PREDICT:], x0)
+        if not got:  # retried with march's step splitting; the loading ends where that fails
+            try:
+                got = march(stage, [grid[len(vs)]], xs[-1] if xs else x0)[-1:]
+            except ConvergenceError:
+                break
+        for st in got:
+            if value(st) >= target:
+                if not vs:
+                    raise InputError(name, target, "a value reached by a contact radius above 1e-3 a_max")
+                return _end_root(stage, lambda s: value(s) - target, vs + [grid[len(vs)]], sts + [st])
+            vs.append(grid[len(vs)])
+            xs.append(stage.x(st))
+            sts.append(st)
+    top, a_top = (value(sts[-1]), vs[-1]) if vs else (value(c.free), 0.0)
+    raise InputError(name, target, f"a value reached on loading (at most {top:.6g} here, "
+                                   f"with contact radius {a_top:.4g})")
 
-            def resid(aa):
-                return value(stage.solve(aa, stage.x(st))) - target
-            return brentq(resid, a_prev, a, xtol=1e-14, rtol=1e-14)
-        a_prev, st_prev, x = a, st, stage.x(st)
-    raise InputError(name, target, f"a value reached on loading (at most {value(st_prev):.6g} here, "
-                                   f"with contact radius {a_prev:.4g})")
+
+def _end_root(stage: Stage, resid, avals: list, sts: list) -> float:
+    """The contact radius where ``resid`` of the state is 0, between the last two of ``avals`` (resid
+    below 0, then at or above): inverse interpolation through the last (up to) four states and each
+    new solve, bisection where it leaves the bracket, to |resid| < ``END_TOL`` (states are solved to
+    1e-10: resid is not resolved much below that); the best of 10 solves otherwise."""
+    lo, hi = avals[-2], avals[-1]
+    pts = [(resid(st), a, st) for a, st in zip(avals[-4:], sts[-4:])]
+    prev = hi
+    for _ in range(10):
+        a = _predict(0.0, [q[0] for q in pts[-4:]], [[q[1]] for q in pts[-4:]], [0.5 * (lo + hi)])[0]
+        if not lo < a < hi:
+            a = 0.5 * (lo + hi)
+        st = stage.solve(a, stage.x(min(pts, key=lambda q: abs(q[1] - a))[2]))
+        f = resid(st)
+        pts.append((f, a, st))
+        if abs(f) < END_TOL or abs(a - prev) <= 1e-14 * (1.0 + a):
+            return a
+        lo, hi, prev = (lo, a, a) if f >= 0.0 else (a, hi, a)
+    return min(pts, key=lambda q: abs(q[0]))[1]
 
 
 def _loading(cfg: Config, c: Control) -> tuple[list, State]:
