@@ -69,6 +69,7 @@ class Control:
         return d0 - d
 
     def _d0_curve(self, p: np.ndarray) -> np.ndarray | None:
+        """d0 at the pressures p from ``free_curve`` if it passes the checks, else None."""
         lo, hi = int(np.argmin(p)), int(np.argmax(p))
         if not p[hi] - p[lo] > 1e-9:
             return None

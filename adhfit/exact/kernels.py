@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from .dop853 import A, B, C
 from .jit import jit
 
@@ -187,7 +188,7 @@ def free_from_edge(y0, rho_a, beta, n, p, A, B, C):
     eps = min(rho_a, beta - rho_a)
     if eps <= 0.0:
         return y0.copy()
-    m = max(n, int(math.ceil(n * math.asinh((beta - rho_a) / eps) / K_APEX)))
+    m = max(n, math.ceil(n * math.asinh((beta - rho_a) / eps) / K_APEX))
     return integrate(FREE, y0, rho_a, beta, eps, m, p, A, B, C)
 
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .jit import jit
 
 from . import kernels as K
+from .jit import jit
 
 CLAMP, A_RES, D_RES, G_RES = 0, 1, 2, 3
 OK, BAD_START, BAD_JAC, SINGULAR, NO_LINE, NO_CONV = 0, 1, 2, 3, 4, 5

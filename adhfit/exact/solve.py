@@ -45,7 +45,7 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
         No convergence, or the iterate left the domain (non-finite shot).
     """
     memo = {} if memo is None else memo
-    vals, unk, res, tg, J = _arrays(edge, fixed, unknowns, residuals, targets, memo)
+    vals, unk, res, tg, J = _arrays(fixed, unknowns, residuals, targets, memo)
     k = len(unknowns)
     out = N.newton_packed(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg,
                           np.asarray(x0, dtype=float), J, tol, max_iter)
@@ -66,14 +66,14 @@ def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: 
     ``targets``) in one compiled call, continuing from the solved (``vs``, ``xs``) (Lagrange predictor,
     Jacobian carried along). Returns the states solved before the first failure (or a state turning
     past vertical at the clamp)."""
-    vals, unk, res, tg, J = _arrays(edge, fixed, unknowns, residuals, targets, memo)
+    vals, unk, res, tg, J = _arrays(fixed, unknowns, residuals, targets, memo)
     in_tg = param in targets
     pidx = ("a", "d", "w").index(param) if in_tg else _KEYS.index(param)
     k = len(unknowns)
     hist = np.asarray(xs, dtype=float).reshape(len(vs), k)
-    done, rows, J, shots = M.march_rows(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, in_tg, pidx,
-                                 np.asarray(values, dtype=float), np.asarray(vs, dtype=float), hist,
-                                 np.asarray(x0, dtype=float), J, tol, max_iter)
+    done, rows, J, shots = M.march_rows(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, in_tg,
+                                        pidx, np.asarray(values, dtype=float), np.asarray(vs, dtype=float),
+                                        hist, np.asarray(x0, dtype=float), J, tol, max_iter)
     memo["J"] = None if np.isnan(J[0, 0]) else J
     memo["shots"] = memo.get("shots", 0) + int(shots)
     out = []
@@ -84,7 +84,7 @@ def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: 
     return out
 
 
-def _arrays(edge, fixed, unknowns, residuals, targets, memo):
+def _arrays(fixed, unknowns, residuals, targets, memo):
     """The compiled solvers' inputs: values, unknown and residual codes, targets, start Jacobian."""
     vals = [fixed.get(k) for k in _KEYS]
     vals = np.array([0.0 if v is None else float(v) for v in vals])

@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass, field
 
 from ..errors import ConvergenceError
-
 from .solve import solve_path, solve_state
 from .state import Config, State
 

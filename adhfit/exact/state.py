@@ -13,7 +13,6 @@ stretch ``lc`` (for no slip: the field frozen at the end of loading, i.e. ``lc``
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from . import kernels as K
