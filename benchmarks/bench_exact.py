@@ -11,7 +11,9 @@ error of the A2 summary (f_max, onset / f_min / turning_point: f, delta, p, a) a
 
 With ``--baseline REV`` it also times the engine of git revision REV against this one in the same run
 (both in fresh subprocesses, alternating, on the four cases at lambda0 = 1.5 and the default n): median
-wall and CPU (process_time) per history, and the ratio before/after.
+wall and CPU (process_time) per history, the ratio before/after, and each engine's summary error
+against this engine at n = 128 and (displacement control) its end-of-loading state against the
+independent reference.
 
 Usage::
 
@@ -42,7 +44,7 @@ from tests import exact_reference as ref  # noqa: E402
 LAMBDA0 = 1.2
 CASES = [("displacement", "frictionless", {"p": 0.6}), ("displacement", "no-slip", {"p": 0.6}),
          ("pressure", "frictionless", {"d": 0.2}), ("pressure", "no-slip", {"d": 0.2})]
-STEPS = (8, 12, 16, 24, 32)
+STEPS = (12, 16, 20, 24, 32)
 
 
 def _run(control, slip, kw, n):
@@ -81,8 +83,11 @@ for _ in range(repeat):
     s = run().summary
     ts.append(time.perf_counter() - t)
     cpu.append(time.process_time() - c)
+h = run()
+m = [st for st, g in zip(h.states, h.columns["stage"]) if g == "making_contact"][-1]
 print(json.dumps({"wall": statistics.median(ts), "cpu": statistics.median(cpu), "cpu_min": min(cpu),
-                  "f_min": s["f_min"]["f"], "turn_delta": s["turning_point"]["delta"]}))
+                  "f_min": s["f_min"]["f"], "turn_delta": s["turning_point"]["delta"], "summary": h.summary,
+                  "loading_end": [m.p, m.rho_a, m.a, m.d, m.f]}))
 """
 
 
@@ -110,7 +115,20 @@ def compare(rev, repeat, rounds=2):
             row[k + "_cpu_ms"] = 1e3 * statistics.median(r["cpu"] for r in res[k])
             row[k + "_wall_ms"] = 1e3 * statistics.median(r["wall"] for r in res[k])
         row["cpu_ratio"] = row["old_cpu_ms"] / row["new_cpu_ms"]
+        row["old_cpu_min_ms"] = 1e3 * min(r["cpu_min"] for r in res["old"])
+        row["new_cpu_min_ms"] = 1e3 * min(r["cpu_min"] for r in res["new"])
         row["summary_diff"] = max(abs(res["old"][0][q] - res["new"][0][q]) for q in ("f_min", "turn_delta"))
+        best = _flat(exact_history(case[0], case[1], w=0.2, rs=0.5, a_max=0.25, lambda0=1.5, points=200, n=128,
+                                   **case[2]).summary)
+        for k in ("old", "new"):
+            s = _flat(res[k][0]["summary"])
+            row[k + "_err_n128"] = max(abs(s[q] - best[q]) for q in best)
+            p, rho_a, a, d, f = res[k][0]["loading_end"]
+            if case[0] == "displacement":
+                ra, rd, rf = ref.making_contact(p, 1.5, 0.5, rho_a)
+                row[k + "_err_ref"] = max(abs(ra - a), abs(rd - d), abs(rf - f))
+            else:
+                row[k + "_err_ref"] = None
         out.append(row)
     return out
 
@@ -118,13 +136,22 @@ def compare(rev, repeat, rounds=2):
 def _compare_lines(rev, cmp):
     lines = ["", f"## Before/after in the same run (lambda0 = 1.5, n = default, 200 rows; before = {rev})", "",
              "Each engine in fresh subprocesses, alternating (2 rounds x --repeat histories after a warm-up); "
-             "medians. CPU = time.process_time of the history.", "",
+             "medians (least in brackets). CPU = time.process_time of the history. Errors: max abs over the "
+             "A2 summary against this engine at n = 128; loading end (a, d, f) against the independent "
+             "adaptive reference (displacement control).", "",
              "| control | slip | before CPU ms | after CPU ms | CPU ratio | before wall ms | after wall ms "
-             "| abs diff (f_min, turning delta) |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+             "| before err (n=128) | after err (n=128) | before / after err (reference) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+
+    def ref_s(r):
+        if r["old_err_ref"] is None:
+            return "—"
+        return f"{r['old_err_ref']:.1e} / {r['new_err_ref']:.1e}"
     for r in cmp:
-        lines.append(f"| {r['control']} | {r['slip']} | {r['old_cpu_ms']:.1f} | {r['new_cpu_ms']:.1f} | "
-                     f"{r['cpu_ratio']:.2f} | {r['old_wall_ms']:.0f} | {r['new_wall_ms']:.0f} | "
-                     f"{r['summary_diff']:.1e} |")
+        lines.append(f"| {r['control']} | {r['slip']} | {r['old_cpu_ms']:.1f} ({r['old_cpu_min_ms']:.1f}) | "
+                     f"{r['new_cpu_ms']:.1f} ({r['new_cpu_min_ms']:.1f}) | {r['cpu_ratio']:.2f} | "
+                     f"{r['old_wall_ms']:.0f} | {r['new_wall_ms']:.0f} | {r['old_err_n128']:.1e} | "
+                     f"{r['new_err_n128']:.1e} | {ref_s(r)} |")
     return lines
 
 
@@ -167,7 +194,7 @@ def main() -> None:
              f"Command: `{meta['command']}` at {commit}; python {meta['python']}, nproc {meta['nproc']}, "
              f"load average at start {load0[0]:.2f}, at end {meta['load_end'][0]:.2f}.", "",
              "Base case p = 0.6 (displacement) or d = 0.2 (pressure), w = 0.2, rs = 0.5, a_max = 0.25. "
-             "n = fixed 8th-order Runge-Kutta steps per membrane segment (default 24). Error: max abs "
+             "n = fixed 8th-order Runge-Kutta steps per membrane segment (default 20). Error: max abs "
              "over the A2 summary values against n = 128; the last column checks the end-of-loading "
              "state (a, d, f) of the n = 128 run against the independent adaptive reference. "
              "The wall times are inflated by the shared machine's load; the least CPU time "

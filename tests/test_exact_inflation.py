@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from adhfit.exact.inflation import free_inflation
@@ -103,3 +104,17 @@ def test_making_contact_energy_balance(rs):
     # U/(mu h b^2) - (P b/mu h) V/b^3 against F dd/(mu h b^2) = 2 f dd
     dE = (sp.u - 2 * p * sp.v) - (sm.u - 2 * p * sm.v)
     assert dE / (sp.d - sm.d) == pytest.approx(-2 * s0.f, rel=1e-6)
+
+
+@pytest.mark.parametrize("lambda0, lo, hi", [(1.5, 0.2, 0.94), (1.1, -0.21, 0.27), (3.0, 0.23, 0.987)])
+def test_free_curve_matches_direct_solves(lambda0, lo, hi):
+    """d0(p) interpolated from free inflation at 24 apex stretches (pressure-control delta) against one
+    Newton solve per pressure: ranges up to the free-inflation pressure maximum's neighbourhood
+    (lambda0 = 3, p -> 0.987, where a polynomial in p itself is off by ~2e-5) and through p = 0."""
+    from adhfit.exact.inflation import free_curve
+    p = np.linspace(lo, hi, 41)
+    ends = [free_inflation(hi, lambda0), free_inflation(lo, lambda0)]
+    d0 = free_curve(p, ends, lambda0)
+    direct = np.array([free_inflation(q, lambda0).d for q in p])
+    # 1e-10: the accepted difference (adhfit.exact.control.D0_CHECK); ~3e-11 through p = 0, 1e-14 otherwise
+    assert np.max(np.abs(d0 - direct)) < 1e-10

@@ -4,10 +4,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
-from .inflation import free_inflation
+from .inflation import free_curve, free_inflation
 from .state import State
 
 __all__ = ["Control", "prepare"]
@@ -33,6 +34,7 @@ class Control:
     n_del: int = 0
     _seen: list = field(default_factory=list)  # (|p|, apex stretch) of the last d0(p): continuation
     _memo: dict = field(default_factory=dict)  # slope of the free-inflation secant iterations
+    _d0: dict = field(default_factory=dict)  # d0 by pressure, as solved
     end: tuple = ("a_max", None)  # the loading end as given
 
     @property
@@ -43,12 +45,48 @@ class Control:
         """delta = d0(p) - d with the exact free-inflation deflection (NaN without a Case I d0)."""
         if self.control == "displacement":
             return self.free.d - st.d
+        if st.p not in self._d0:  # one value per pressure (onset, f_min, turning point may coincide)
+            try:
+                fi = free_inflation(st.p, self.lambda0, self.n, self._guess(abs(st.p)), self._memo)
+                self._seen = (self._seen + [(abs(st.p), fi.lc)])[-3:]
+                self._d0[st.p] = fi.d
+            except ConvergenceError:
+                self._d0[st.p] = math.nan
+        return self._d0[st.p] - st.d
+
+    def deltas(self, states: list) -> np.ndarray:
+        """``delta`` of every state. Under pressure control d0(p) comes from ``free_curve`` (free
+        inflation at a few stretches, interpolated), checked against direct solves at the rows nearest
+        the ends and the middle of the rows' range of p, and replaced by one solve per row where they
+        differ by more than ``D0_CHECK`` (or the curve leaves Case I)."""
+        d = np.array([st.d for st in states], dtype=float)
+        if self.control == "displacement":
+            return self.free.d - d
+        p = np.array([st.p for st in states], dtype=float)
+        d0 = self._d0_curve(p)
+        if d0 is None:
+            d0 = np.array([self.delta(_AtP(q, 0.0)) for q in p])
+        return d0 - d
+
+    def _d0_curve(self, p: np.ndarray) -> np.ndarray | None:
+        """d0 at the pressures p from ``free_curve`` if it passes the checks, else None."""
+        lo, hi = int(np.argmin(p)), int(np.argmax(p))
+        if not p[hi] - p[lo] > 1e-9:
+            return None
         try:
-            fi = free_inflation(st.p, self.lambda0, self.n, self._guess(abs(st.p)), self._memo)
-            self._seen = (self._seen + [(abs(st.p), fi.lc)])[-3:]
-            return fi.d - st.d
+            ends = [free_inflation(p[i], self.lambda0, self.n, self._guess(abs(p[i])), self._memo)
+                    for i in (hi, lo)]
         except ConvergenceError:
-            return math.nan
+            return None
+        d0 = free_curve(p, ends, self.lambda0, self.n)
+        if d0 is None:
+            return None
+        mids = np.sort(p)[[len(p) // 20, len(p) // 2, len(p) - 1 - len(p) // 20]]
+        for q in mids:
+            i = int(np.argmin(np.abs(p - q)))
+            if not abs(d0[i] - self.delta(_AtP(p[i], 0.0))) <= D0_CHECK:
+                return None
+        return d0
 
     def _guess(self, q: float) -> float | None:
         """Apex stretch of free inflation at |p| = q, extrapolated from the last (up to 3) solved."""
@@ -70,6 +108,17 @@ class Control:
         return {"control": self.control, "slip": self.slip, "p": self.p, "d": self.d, "w": self.w,
                 "rs": self.rs, "lambda0": self.lambda0, "a_max": self.a_max, "points": self.points,
                 "membrane": "exact"}
+
+
+D0_CHECK = 1e-10  # largest accepted difference of the interpolated d0 from a direct solve
+
+
+@dataclass
+class _AtP:
+    """A stand-in state (pressure, deflection) for ``Control.delta``."""
+
+    p: float
+    d: float
 
 
 def _check(name, value, lo, hi, valid, *, lo_open=True, hi_open=True):
@@ -124,6 +173,7 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
         _check("p_max", p_max, free.p, 1e3, f"a float above the touching pressure {free.p:.6g}")
     c = Control(control, slip, p, d, w, rs, lambda0, a_max, int(points), n, free)
     c.end = ends[0]
+    c._seen = [(abs(free.p), free.lc)]  # d0(p) continuation starts from the free state
     c.n_mc = max(4, round(0.3 * points))
     c.n_pin = max(4, round(0.2 * points))
     c.n_del = max(5, points - c.n_mc - c.n_pin + 2)

@@ -5,15 +5,17 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
 from .control import Control, prepare
+from .march import PREDICT
 from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
 __all__ = ["ExactHistory", "exact_history", "COLUMNS"]
 
+END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 
 
@@ -38,9 +40,9 @@ def _split(points):
 
 
 def _predict(v, vs, xs, x0):
-    """Lagrange extrapolation through the last (up to) four solved states (cubic: ~10 % fewer shots
-    than quadratic on the base cases)."""
-    k = min(len(xs), 4)
+    """Lagrange extrapolation through the last (up to) six solved states (quintic: ~20 % fewer shots
+    than cubic on the base cases at lambda0 = 1.5; a failed step is split by ``march``)."""
+    k = min(len(xs), PREDICT)
     if k == 0:
         return list(x0)
     if len(set(vs[-k:])) < k:
@@ -58,12 +60,21 @@ def _predict(v, vs, xs, x0):
 def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) -> list:
     """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
     predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
-    (a fold the parameter cannot pass) returns the states solved up to there instead of raising."""
+    (a fold the parameter cannot pass) returns the states solved up to there instead of raising.
+    Runs of rows are solved in one compiled call (``Stage.path``); a row that fails there is retried
+    here (its error, or the split)."""
     out, xs, vs = [], [], []
-    for v in values:
-        guess = _predict(v, vs, xs, x0)
+    values = list(values)
+    while len(vs) < len(values):
+        for st in stage.path(values[len(vs):], vs[-PREDICT:], xs[-PREDICT:], x0):
+            out.append(st)
+            xs.append(stage.x(st))
+            vs.append(values[len(vs)])
+        if len(vs) == len(values):
+            break
+        v = values[len(vs)]
         try:
-            st = stage.solve(v, guess)
+            st = stage.solve(v, _predict(v, vs, xs, x0))
         except ConvergenceError:
             if depth >= 12 or not vs:
                 if stop_ok:
@@ -83,27 +94,53 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) ->
 
 
 def _loading_end(stage: Stage, c: Control) -> float:
-    """a_max from delta_max or p_max: march the loading in a, then solve the end condition."""
+    """a_max from delta_max or p_max: march the loading in a (a geometric grid, runs of 8 in one
+    compiled call), then solve the end condition between the grid values that bracket it."""
     name, target = c.end
     value = (lambda s: c.free.d - s.d) if name == "delta_max" else (lambda s: s.p)
     cap = 0.95 * min(1.0, c.rs)
-    a_prev, st_prev = 0.0, c.free
-    x = [c.free.lc, 1e-3 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
-    for a in np.geomspace(1e-3 * cap, cap, 60):
-        try:
-            st = march(stage, [a], x)[-1]
-        except ConvergenceError:
-            break
-        if value(st) >= target:
-            if a_prev == 0.0:
-                raise InputError(name, target, "a value reached by a contact radius above 1e-3 a_max")
+    grid = list(np.geomspace(1e-3 * cap, cap, 60))
+    x0 = [c.free.lc, 1e-3 * cap / c.free.lc] + ([c.free.p] if c.control == "pressure" else [])
+    vs, xs, sts = [], [], []
+    while len(vs) < len(grid):
+        got = stage.path(grid[len(vs):len(vs) + 8], vs[-PREDICT:], xs[-PREDICT:], x0)
+        if not got:  # retried with march's step splitting; the loading ends where that fails
+            try:
+                got = march(stage, [grid[len(vs)]], xs[-1] if xs else x0)[-1:]
+            except ConvergenceError:
+                break
+        for st in got:
+            if value(st) >= target:
+                if not vs:
+                    raise InputError(name, target, "a value reached by a contact radius above 1e-3 a_max")
+                return _end_root(stage, lambda s: value(s) - target, vs + [grid[len(vs)]], sts + [st])
+            vs.append(grid[len(vs)])
+            xs.append(stage.x(st))
+            sts.append(st)
+    top, a_top = (value(sts[-1]), vs[-1]) if vs else (value(c.free), 0.0)
+    raise InputError(name, target, f"a value reached on loading (at most {top:.6g} here, "
+                                   f"with contact radius {a_top:.4g})")
 
-            def resid(aa):
-                return value(stage.solve(aa, stage.x(st))) - target
-            return brentq(resid, a_prev, a, xtol=1e-14, rtol=1e-14)
-        a_prev, st_prev, x = a, st, stage.x(st)
-    raise InputError(name, target, f"a value reached on loading (at most {value(st_prev):.6g} here, "
-                                   f"with contact radius {a_prev:.4g})")
+
+def _end_root(stage: Stage, resid, avals: list, sts: list) -> float:
+    """The contact radius where ``resid`` of the state is 0, between the last two of ``avals`` (resid
+    below 0, then at or above): inverse interpolation through the last (up to) four states and each
+    new solve, bisection where it leaves the bracket, to |resid| < ``END_TOL`` (states are solved to
+    1e-10: resid is not resolved much below that); the best of 10 solves otherwise."""
+    lo, hi = avals[-2], avals[-1]
+    pts = [(resid(st), a, st) for a, st in zip(avals[-4:], sts[-4:])]
+    prev = hi
+    for _ in range(10):
+        a = _predict(0.0, [q[0] for q in pts[-4:]], [[q[1]] for q in pts[-4:]], [0.5 * (lo + hi)])[0]
+        if not lo < a < hi:
+            a = 0.5 * (lo + hi)
+        st = stage.solve(a, stage.x(min(pts, key=lambda q: abs(q[1] - a))[2]))
+        f = resid(st)
+        pts.append((f, a, st))
+        if abs(f) < END_TOL or abs(a - prev) <= 1e-14 * (1.0 + a):
+            return a
+        lo, hi, prev = (lo, a, a) if f >= 0.0 else (a, hi, a)
+    return min(pts, key=lambda q: abs(q[0]))[1]
 
 
 def _loading(cfg: Config, c: Control) -> tuple[list, State]:
@@ -117,26 +154,45 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
     return [free] + states, states[-1]
 
 
-def _onset(cfg, c, m):
-    """Bracket G = w along pinning (steps in alpha, halved where a step fails), then solve it."""
-    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
-    top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
-    prev, prev_a, step = m, 0.0, 0.04
+def _bracket(pin, c, m, top):
+    """Steps in alpha along pinning from the loading end ``m`` until G >= w: (last state below w, its
+    alpha, first state at or above w, its alpha). Each step aims 3 % past where G ~ alpha^2 reaches w
+    (at most 4 times the last step and 0.3; a step longer than the old fixed 0.04 that fails or
+    finds G falling is halved, and steps no longer grow)."""
+    prev, prev_a, step, grow = m, 0.0, 0.04, True
+    vs, xs = [0.0], [pin.x(m)]
     while True:
         alpha = prev_a + step
+        if alpha >= top and step > 0.04:
+            step, grow = 0.04, False
+            continue
         if alpha >= top or step < 1e-9:
             raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
                                    "(the clamp turning past vertical, or the contact region going slack: "
                                    "stretch -> 1, outside a membrane model)",
                                    {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
         try:
-            st = pin.solve(alpha, pin.x(prev))
+            st = pin.solve(alpha, _predict(alpha, vs, xs, pin.x(prev)))
         except ConvergenceError:
-            step *= 0.5
+            step, grow = 0.5 * step, False
+            continue
+        if step > 0.04 and st.G < prev.G:  # a long step past a fold, or onto another branch: shorten
+            step, grow = 0.5 * step, False
             continue
         if st.G >= c.w:
-            break
+            return prev, prev_a, st, alpha
+        if grow and st.G > 0.0:
+            step = min(max(1.03 * alpha * math.sqrt(c.w / st.G) - alpha, step), 4.0 * step, 0.3)
         prev, prev_a = st, alpha
+        vs.append(alpha)
+        xs.append(pin.x(st))
+
+
+def _onset(cfg, c, m):
+    """Bracket G = w along pinning (``_bracket``), then solve it."""
+    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
+    prev, prev_a, st, alpha = _bracket(pin, c, m, top)
     on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     t = (c.w - prev.G) / (st.G - prev.G)
     guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
@@ -176,22 +232,55 @@ def _delamination(cfg, c, m, on):
     return states, stage
 
 
+def _vertex(x, y, c, h):
+    """The minimum of the polynomial through (x, y) nearest the centre c (scale h): Newton on its
+    derivative from the least sample; None if it does not converge within 2.5 h of c."""
+    t = (np.asarray(x, dtype=float) - c) / h
+    coef = np.linalg.solve(np.vander(t), np.asarray(y, dtype=float))
+    d1 = np.polyder(coef)
+    d2 = np.polyder(d1)
+    r = t[int(np.argmin(y))]
+    for _ in range(30):
+        step = np.polyval(d1, r) / np.polyval(d2, r)
+        r -= step
+        if not abs(r) <= 2.5:
+            return None
+        if abs(step) < 1e-13:
+            return c + h * r if np.polyval(d2, r) > 0.0 else None
+    return None
+
+
 def _extremum(stage, states, key, sign):
-    """Refine the extremum of sign*key over the delamination path by a bounded Brent search."""
+    """Refine the minimum of sign*key over the delamination path: the vertex of the polynomial through
+    the (up to) five rows around the least row, then of the quartic through five states solved to
+    1e-14 on a stencil of a tenth of the row spacing around it (the objective is flat there: its
+    derivative, not its value, locates the minimum)."""
     vals = [sign * key(s) for s in states]
     i = int(np.argmin(vals))
     if i == 0 or i == len(states) - 1:
         return states[i]
     lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
-    cache = {}
-
-    def fun(r):
-        st = stage.solve(r, stage.x(states[i]), tol=1e-14)  # a smooth objective: the extremum is flat
-        cache[r] = st
-        return sign * key(st)
-
-    res = minimize_scalar(fun, bounds=(lo, hi), method="bounded", options={"xatol": 1e-11 * hi})
-    return cache.get(res.x) or stage.solve(res.x, stage.x(states[i]), tol=1e-14)
+    if not hi > lo:
+        return states[i]
+    j0, j1 = max(0, i - 2), min(len(states), i + 3)
+    h = 0.05 * (hi - lo)
+    c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
+    c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
+    vs, xs = [st.rho_a for st in states[j0:j1]][::-1], [stage.x(st) for st in states[j0:j1]][::-1]
+    pts = []
+    for _ in range(3):
+        grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
+        pts = stage.path(grid, vs, xs, xs[-1], tol=1e-14)
+        if len(pts) < len(grid):
+            break
+        v = _vertex(grid, [sign * key(st) for st in pts], c, h)
+        if v is None:
+            break
+        if abs(v - c) <= 1.5 * h:
+            fin = stage.path([v], grid, [stage.x(st) for st in pts], xs[-1], tol=1e-14)
+            return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=1e-14)
+        c = min(max(v, lo + 2 * h), hi - 2 * h)
+    return min(pts + [states[i]], key=lambda st: sign * key(st))
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
@@ -206,7 +295,7 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     lambda0 : float
         Pre-stretch, > 1; every observable depends on it.
     n : int
-        Integration steps per membrane segment (the default 24 gives ~4e-9 on the observables).
+        Integration steps per membrane segment (the default 20 gives ~1e-9 on the observables).
 
     Returns
     -------
@@ -252,7 +341,7 @@ def _assemble(c, mc, pin, dl, m, on, turn, fmin):
     for k in ("a", "alpha", "p", "d", "f", "G"):
         cols[k] = np.array([getattr(s, k) for _, s in rows], dtype=float)
     cols["G"][: len(mc)] = 0.0
-    cols["delta"] = np.array([c.delta(s) for _, s in rows], dtype=float)
+    cols["delta"] = c.deltas([s for _, s in rows])
     cols["stable"] = np.arange(len(rows)) <= turn_i
     summary = {"f_max": m.f, "onset": _row(on, c), "f_min": _row(fmin, c), "turning_point": _row(turn, c)}
     return ExactHistory(cols, summary, c.inputs(), [s for _, s in rows])

@@ -3,14 +3,18 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError
+from . import chebyshev as CH
 from . import kernels as K
 from . import newton as N
 from .state import DEFAULT_N, Config, State, evaluate
 
-__all__ = ["free_inflation", "apex_deflection"]
+__all__ = ["free_inflation", "apex_deflection", "free_curve"]
+
+D0_NODES = 24  # apex stretches of free_curve (d0 to ~3e-11 when p changes sign, ~1e-13 otherwise)
 
 
 def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None,
@@ -80,4 +84,49 @@ def _bracketed(resid, lambda0, p):
         lo, hi = hi, hi * 1.2
         if hi > 1e3 * lambda0:
             raise ConvergenceError("exact free inflation", {"p": p, "lambda0": lambda0})
-    return brentq(resid, lo, hi, xtol=1e-15, rtol=1e-15)
+
+    def finite(lc):  # the shot leaves the domain inside the bracket: no Case I state found
+        r = resid(lc)
+        if not math.isfinite(r):
+            raise ConvergenceError("exact free inflation: no Case I state", {"p": p, "lambda0": lambda0})
+        return r
+    return brentq(finite, lo, hi, xtol=1e-15, rtol=1e-15)
+
+
+def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
+               nodes: int = D0_NODES) -> np.ndarray | None:
+    """d0(p) at many pressures from free inflation at ``nodes`` apex stretches only.
+
+    Parametrized by u = sign(p) sqrt(lc - lambda0) (lc the apex stretch), in which p and d0 are smooth
+    from p = 0 through the pressure maximum of free inflation (d0(p) itself has a square-root branch
+    point there, so a polynomial in p would converge slowly): p(u) and d0(u) are interpolated on
+    Chebyshev points between the ends (``chebyshev``), and p(u) = p is inverted by Newton on the
+    interpolant.
+
+    Parameters
+    ----------
+    p : ndarray
+        Pressures.
+    ends : list of State
+        Free inflation at max(p) and at min(p).
+    lambda0, n
+        Pre-stretch, integration steps.
+    nodes : int
+        Interpolation points.
+
+    Returns
+    -------
+    ndarray or None
+        d0 at each p; None where a node fails or leaves Case I (the caller solves each p instead).
+    """
+    u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
+    u = 0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * np.cos(np.pi * np.arange(nodes) / (nodes - 1))
+    out = N.free_at_stretches(u, lambda0, 1.0 / lambda0, n, ends[0].p)
+    if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
+        return None
+    pn, dn = out[0], np.sign(u) * out[1]
+    if not np.all(np.diff(pn) < 0.0):
+        return None
+    x0 = (np.interp(p, pn[::-1], u[::-1]) - 0.5 * (u_lo + u_hi)) / (0.5 * (u_hi - u_lo))
+    d0 = CH.invert(pn, dn, np.asarray(p, dtype=float), x0)
+    return d0 if np.all(np.isfinite(d0)) else None

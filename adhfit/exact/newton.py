@@ -12,15 +12,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from . import kernels as K
+from .jit import jit
 
 CLAMP, A_RES, D_RES, G_RES = 0, 1, 2, 3
 OK, BAD_START, BAD_JAC, SINGULAR, NO_LINE, NO_CONV = 0, 1, 2, 3, 4, 5
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def shot_vals(edge, crv, beta, n, vals, cache):
     """Shoot at ``vals``; ``cache`` = (lc, rho_a, yc[4]) of the last contact field. NaN out: outside."""
     lc, rho_a, alpha, p = vals[1], max(vals[2], 0.0), vals[3], vals[0]
@@ -44,7 +44,7 @@ def shot_vals(edge, crv, beta, n, vals, cache):
     return o
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _residual(o, res, tg):
     out = np.empty(res.shape[0])
     for i in range(res.shape[0]):
@@ -60,7 +60,7 @@ def _residual(o, res, tg):
     return out
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _at(edge, crv, beta, n, vals, unk, x, cache):
     v = vals.copy()
     for i in range(unk.shape[0]):
@@ -68,7 +68,7 @@ def _at(edge, crv, beta, n, vals, unk, x, cache):
     return shot_vals(edge, crv, beta, n, v, cache)
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _lin_solve(J, b):
     """Gaussian elimination with partial pivoting (k <= 3); ok False for a singular matrix."""
     k = b.shape[0]
@@ -98,7 +98,7 @@ def _lin_solve(J, b):
     return y, True
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r0, cache):
     k = x.shape[0]
     J = np.empty((r0.shape[0], k))
@@ -117,7 +117,7 @@ def _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r0, cache):
     return J, True
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def _line_search(edge, crv, beta, n, vals, unk, res, tg, x, dx, nrm, cache):
     lam = 1.0
     while lam > 1e-4:
@@ -131,7 +131,7 @@ def _line_search(edge, crv, beta, n, vals, unk, res, tg, x, dx, nrm, cache):
     return x, np.full(K.N_OUT, np.nan), np.full(res.shape[0], np.nan), False
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def newton_packed(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     """``newton`` with its results in one array (status, shots, x[k], out[N_OUT], J[k*k]): one array
     to hand back to Python instead of three."""
@@ -145,7 +145,7 @@ def newton_packed(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter)
     return out
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     """Solve the residuals for the unknowns from ``x0``; ``J0`` a Jacobian to start from (NaN: none).
 
@@ -153,6 +153,13 @@ def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     and ``shots`` the number of shots taken.
     """
     cache = np.full(7, np.nan)
+    return newton_cached(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter, cache)
+
+
+@jit
+def newton_cached(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter, cache):
+    """``newton`` with the contact field's cache (see ``shot_vals``) kept by the caller: a no-slip
+    pinning march reuses one contact field for all its rows."""
     cache[6] = 0.0
     x = x0.copy()
     o = _at(edge, crv, beta, n, vals, unk, x, cache)
@@ -195,7 +202,7 @@ def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     return NO_CONV, x, o, J, cache[6]
 
 
-@njit(cache=True, error_model="numpy")
+@jit
 def free_newton(q, beta, n, x, slope):
     """Apex stretch of free inflation at pressure q from a close guess ``x``: secant iterations from
     the slope ``slope`` of r(beta) in lc (NaN: a difference quotient). Returns (lc, slope, y) with y
@@ -218,3 +225,51 @@ def free_newton(q, beta, n, x, slope):
             slope = (fn - fx) / (xn - x)
         x, fx = xn, fn
     return np.nan, np.nan, y
+
+
+@jit
+def _extrapolate(xs, ys, i, x, order):
+    """Lagrange extrapolation to x through the (up to) ``order`` points before index i."""
+    k = min(i, order)
+    out = 0.0
+    for a in range(i - k, i):
+        w = 1.0
+        for b in range(i - k, i):
+            if b != a:
+                w *= (x - xs[b]) / (xs[a] - xs[b])
+        out += w * ys[a]
+    return out
+
+
+@jit
+def free_at_stretches(us, lambda0, beta, n, p_start):
+    """Free inflation at the apex stretches lc = lambda0 + u^2 for u in ``us`` (in order: continuation),
+    u carrying the sign of p: the pressure with r(beta) = 1 by secant iterations in s = p^2 (r(beta) is
+    linear in p^2 near p = 0, so this is well conditioned down to lc = lambda0), started from p and the
+    slope extrapolated in u from the nodes before. Returns (p, d0, theta_end) per node (d0, theta_end
+    for |p|); NaN from the first node that fails."""
+    m = us.shape[0]
+    out = np.full((3, m), np.nan)
+    slopes = np.full(m, np.nan)
+    for i in range(m):
+        lc = lambda0 + us[i] * us[i]
+        q = abs(_extrapolate(us, out[0], i, us[i], 4)) if i > 0 else abs(p_start)
+        slope = _extrapolate(us, slopes, i, us[i], 2) if i > 0 else np.nan
+        s0 = q * q
+        y = K.from_apex(K.FREE, lc, beta, n, q, K.A, K.B, K.C)
+        f0 = y[0] - 1.0
+        s1 = s0 - f0 / slope if math.isfinite(slope) and slope < 0.0 else s0 * (1.0 + 1e-6) + 1e-12
+        for _ in range(30):
+            if abs(f0) < 1e-14 or s1 == s0:
+                break
+            y1 = K.from_apex(K.FREE, lc, beta, n, math.sqrt(max(s1, 0.0)), K.A, K.B, K.C)
+            f1 = y1[0] - 1.0
+            if not math.isfinite(f1) or f1 == f0:
+                return out
+            slope = (f1 - f0) / (s1 - s0)
+            s0, s1, f0, y = s1, max(s1 - f1 / slope, 0.0), f1, y1
+        if not abs(f0) < 1e-13:
+            return out
+        slopes[i] = slope
+        out[0, i], out[1, i], out[2, i] = math.copysign(math.sqrt(s0), us[i]), y[1], y[2]
+    return out

@@ -12,10 +12,11 @@ import numpy as np
 
 from ..errors import ConvergenceError
 from . import kernels as K
+from . import march as M
 from . import newton as N
 from .state import Config, State, evaluate
 
-__all__ = ["shoot", "solve_state"]
+__all__ = ["shoot", "solve_state", "solve_path"]
 
 _KEYS = ("p", "lc", "rho_a", "alpha", "l1p")
 _RES = {"clamp": N.CLAMP, "a": N.A_RES, "d": N.D_RES, "G": N.G_RES}
@@ -44,19 +45,8 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
         No convergence, or the iterate left the domain (non-finite shot).
     """
     memo = {} if memo is None else memo
-    vals = [fixed.get(k) for k in _KEYS]
-    vals = np.array([0.0 if v is None else float(v) for v in vals])
-    codes = memo.get("codes")
-    if codes is None or codes[0] != (unknowns, residuals):
-        codes = ((unknowns, residuals), np.array([_KEYS.index(k) for k in unknowns], dtype=np.int64),
-                 np.array([_RES[r] for r in residuals], dtype=np.int64))
-        memo["codes"] = codes
-    _, unk, res = codes
-    tg = np.array([targets.get("a", 0.0), targets.get("d", 0.0), targets.get("w", 0.0)])
+    vals, unk, res, tg, J = _arrays(fixed, unknowns, residuals, targets, memo)
     k = len(unknowns)
-    J = memo.get("J")
-    if J is None or J.shape != (len(res), k):
-        J = np.full((len(res), k), np.nan)
     out = N.newton_packed(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg,
                           np.asarray(x0, dtype=float), J, tol, max_iter)
     status = int(out[0])
@@ -66,7 +56,55 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
     if status != N.OK:
         raise ConvergenceError("exact membrane: " + _WHY[status],
                                {**fixed, **targets, "lambda0": cfg.lambda0})
-    vals[unk] = out[2:2 + k]
-    r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = out[2 + k:2 + k + K.N_OUT].tolist()
+    return _state(vals, unk, out[2:2 + k + K.N_OUT])
+
+
+def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: tuple, targets: dict,
+               param: str, values, vs: list, xs: list, x0, *, tol: float = 1e-10, max_iter: int = 40,
+               memo: dict) -> list:
+    """``solve_state`` at each of ``values`` of the parameter ``param`` (a key of ``fixed`` or of
+    ``targets``) in one compiled call, continuing from the solved (``vs``, ``xs``) (Lagrange predictor,
+    Jacobian carried along). Returns the states solved before the first failure (or a state turning
+    past vertical at the clamp)."""
+    vals, unk, res, tg, J = _arrays(fixed, unknowns, residuals, targets, memo)
+    in_tg = param in targets
+    pidx = ("a", "d", "w").index(param) if in_tg else _KEYS.index(param)
+    k = len(unknowns)
+    hist = np.asarray(xs, dtype=float).reshape(len(vs), k)
+    done, rows, J, shots = M.march_rows(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, in_tg,
+                                        pidx, np.asarray(values, dtype=float), np.asarray(vs, dtype=float),
+                                        hist, np.asarray(x0, dtype=float), J, tol, max_iter)
+    memo["J"] = None if np.isnan(J[0, 0]) else J
+    memo["shots"] = memo.get("shots", 0) + int(shots)
+    out = []
+    for i in range(done):
+        if not in_tg:
+            vals[pidx] = values[i]
+        out.append(_state(vals, unk, rows[i]))
+    return out
+
+
+def _arrays(fixed, unknowns, residuals, targets, memo):
+    """The compiled solvers' inputs: values, unknown and residual codes, targets, start Jacobian."""
+    vals = [fixed.get(k) for k in _KEYS]
+    vals = np.array([0.0 if v is None else float(v) for v in vals])
+    codes = memo.get("codes")
+    if codes is None or codes[0] != (unknowns, residuals):
+        codes = ((unknowns, residuals), np.array([_KEYS.index(k) for k in unknowns], dtype=np.int64),
+                 np.array([_RES[r] for r in residuals], dtype=np.int64))
+        memo["codes"] = codes
+    _, unk, res = codes
+    tg = np.array([targets.get("a", 0.0), targets.get("d", 0.0), targets.get("w", 0.0)])
+    J = memo.get("J")
+    if J is None or J.shape != (len(res), len(unknowns)):
+        J = np.full((len(res), len(unknowns)), np.nan)
+    return vals, unk, res, tg, J
+
+
+def _state(vals, unk, row) -> State:
+    """A State from the unknowns and observables of a solved row (``vals`` gets the unknowns)."""
+    k = unk.shape[0]
+    vals[unk] = row[:k]
+    r_end, d, th, a, f, G, l1m, l1p_, l2, u, v = row[k:k + K.N_OUT].tolist()
     p, lc, rho_a, alpha = vals[:4].tolist()
     return State(lc, max(rho_a, 0.0), alpha, p, a, d, f, G, r_end, th, l1m, l1p_, l2, u, v)

@@ -11,8 +11,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..errors import ConvergenceError
-
-from .solve import solve_state
+from .solve import solve_path, solve_state
 from .state import Config, State
 
 __all__ = ["Stage", "making_contact", "pinning", "delamination", "onset", "branch_end"]
@@ -47,6 +46,13 @@ class Stage:
                                    "(Case II, outside the model: Case I only)",
                                    {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
         return st
+
+    def path(self, values, vs: list, xs: list, x0, tol: float = 1e-10) -> list:
+        """The states at each of ``values`` in one compiled call, continuing from the solved
+        parameters ``vs`` and unknowns ``xs`` (``x0`` when there are none): the states solved before
+        the first failure (including a state past vertical at the clamp, which ``solve`` reports)."""
+        return solve_path(self.cfg, self.edge, self.fixed, self.unknowns, self.residuals, self.targets,
+                          self.param, values, vs, xs, x0, memo=self.memo, tol=tol)
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""

@@ -13,14 +13,13 @@ stretch ``lc`` (for no slip: the field frozen at the end of loading, i.e. ``lc``
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from . import kernels as K
 
 __all__ = ["Config", "State", "evaluate", "release_rate", "DEFAULT_N"]
 
-DEFAULT_N = 24  # steps per segment: ~4e-9 on the observables (benchmarks/results/exact.md)
+DEFAULT_N = 20  # steps per segment: ~1e-9 on the summary against n = 128 (benchmarks/results/exact.md)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,77 @@
+"""Compiled continuation along one stage: many rows in one call (the row loop of ``history.march``).
+
+For each parameter value in turn: a Lagrange predictor through the last (up to) six solved states,
+then ``newton.newton`` from it with the Jacobian carried from row to row (Broyden-updated). The loop
+stops at the first row that fails or turns past vertical at the clamp; the caller handles that row
+(step splitting, or the error) in Python, as before.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import kernels as K
+from . import newton as N
+from .jit import jit
+
+__all__ = ["march_rows", "PREDICT"]
+
+PREDICT = 6  # states the predictor extrapolates through (quintic)
+
+
+@jit
+def predict(v, vs, xs, cnt, x0):
+    """Lagrange extrapolation to ``v`` through the last (up to) ``PREDICT`` of the ``cnt`` solved
+    (vs, xs); ``x0`` when none is solved, the last state when parameter values repeat."""
+    k = min(cnt, PREDICT)
+    if k == 0:
+        return x0.copy()
+    for a in range(cnt - k, cnt):
+        for b in range(a + 1, cnt):
+            if vs[a] == vs[b]:
+                return xs[cnt - 1].copy()
+    out = np.zeros(xs.shape[1])
+    for i in range(cnt - 1, cnt - k - 1, -1):
+        li = 1.0
+        for j in range(cnt - 1, cnt - k - 1, -1):
+            if j != i:
+                li *= (v - vs[j]) / (vs[i] - vs[j])
+        for q in range(xs.shape[1]):
+            out[q] += li * xs[i, q]
+    return out
+
+
+@jit
+def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0, xs0, x0, J0, tol,
+               max_iter):
+    """Solve the stage at each of ``values`` (the parameter: ``vals[pidx]``, or ``tg[pidx]`` when
+    ``in_tg``) continuing from the solved history (``vs0``, ``xs0``). Returns (rows solved, per row
+    the unknowns then the N_OUT observables, the last Jacobian, shots taken)."""
+    m, k, h = values.shape[0], unk.shape[0], vs0.shape[0]
+    vs = np.empty(h + m)
+    xs = np.empty((h + m, k))
+    vs[:h] = vs0
+    xs[:h] = xs0
+    rows = np.full((m, k + K.N_OUT), np.nan)
+    J = J0.copy()
+    total = 0.0
+    cache = np.full(7, np.nan)
+    for i in range(m):
+        v = values[i]
+        vv, tt = vals.copy(), tg.copy()
+        if in_tg:
+            tt[pidx] = v
+        else:
+            vv[pidx] = v
+        guess = predict(v, vs, xs, h + i, x0)
+        status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol,
+                                                  max_iter, cache)
+        total += shots
+        if status != N.OK or not o[2] < 0.5 * math.pi:
+            return i, rows, J, total
+        vs[h + i] = v
+        xs[h + i] = x
+        rows[i, :k] = x
+        rows[i, k:] = o
+    return m, rows, J, total
