@@ -57,5 +57,17 @@ def test_every_kernel_is_cached_on_the_core_hash():
     assert jit.KEYED_ON_CORE
     for kernel in (special.carlson_rf, history.run):
         locator = kernel._cache._impl.locator
-        assert type(locator).__name__ == "_CoreLocator"
+        assert type(locator).__name__ == "_TreeLocator"
         assert locator.get_source_stamp() == jit.core_hash()
+
+
+def test_exact_kernels_are_cached_on_the_exact_hash():
+    """The exact membrane's kernels are stamped with the hash of all of exact/, not core/'s."""
+    from adhfit.exact import jit as exact_jit  # noqa: PLC0415
+    from adhfit.exact import kernels  # noqa: PLC0415
+
+    assert exact_jit.KEYED_ON_EXACT
+    kernel = next(getattr(kernels, n) for n in dir(kernels) if hasattr(getattr(kernels, n), "_cache"))
+    locator = kernel._cache._impl.locator
+    assert type(locator).__name__ == "_TreeLocator"
+    assert locator.get_source_stamp() == exact_jit.exact_hash() != jit.core_hash()

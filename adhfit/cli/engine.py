@@ -20,14 +20,18 @@ COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
 
 
 def _marker() -> Path:
-    """The file that says the kernels of this exact ``adhfit/core`` tree were compiled and cached.
+    """The file that says the kernels of this exact ``adhfit/core`` and ``adhfit/exact`` were compiled
+    and cached.
 
-    The kernels are cached by numba under one key, a hash of every ``core/*.py``
-    (:func:`adhfit.core.jit.core_hash`); :func:`warm_up` leaves this marker, named after the same
-    hash, once they have been compiled or loaded.  Any edit of ``core/`` changes the name.
+    The kernels are cached by numba under one key per engine folder, a hash of its ``*.py``
+    (:func:`adhfit.core.jit.tree_hash`); :func:`warm_up` leaves this marker, named after both hashes,
+    once they have been compiled or loaded.  Any edit of either engine changes the name.
     """
-    from ..core.jit import core_hash  # noqa: PLC0415
-    return Path(__file__).resolve().parent.parent / "core" / "__pycache__" / f"engine-{core_hash()[:16]}.ready"
+    import hashlib  # noqa: PLC0415
+    from ..core.jit import core_hash, tree_hash  # noqa: PLC0415
+    engines = Path(__file__).resolve().parent.parent
+    key = hashlib.sha256((core_hash() + tree_hash(engines / "exact")).encode()).hexdigest()
+    return engines / "core" / "__pycache__" / f"engine-{key[:16]}.ready"
 
 
 def engine_cache_is_cold() -> bool:
