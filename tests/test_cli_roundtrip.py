@@ -202,3 +202,17 @@ def test_engine_loaded_in_a_thread_reports_its_failure(tmp_path, capsys, monkeyp
                  str(tmp_path / "o"), "--no-plot", "--quiet"])
     err = capsys.readouterr().err
     assert code != 0 and len(err.strip().splitlines()) == 1 and "warm-up history" in err
+
+
+def test_console_script_flushes_and_returns_the_status(tmp_path):
+    """The console script leaves through os._exit after main(): output complete, status kept."""
+    import json as _json
+    import subprocess
+    import sys
+    bad = subprocess.run([sys.executable, "-m", "adhfit.cli", "fit", str(tmp_path / "missing.csv"), "--scene",
+                          str(SAMPLE / "scene.toml")], capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "missing.csv" in bad.stderr
+    ok = subprocess.run([sys.executable, "-m", "adhfit.cli", "simulate", "--control", "displacement", "--slip",
+                         "no-slip", "--p", "0.6", "--w", "0.2", "--rs", "0.5", "--a-max", "0.25", "--json"],
+                        capture_output=True, text=True, timeout=300)
+    assert ok.returncode == 0 and _json.loads(ok.stdout)["f_max"] > 0

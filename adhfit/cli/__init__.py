@@ -9,6 +9,6 @@ or a Dask cluster), :mod:`.writing` (the output folder, the summary lines), :mod
 run's compile notice, the warm-up and the running clock).  Every fit goes through :func:`adhfit.fit`
 and every report through :func:`adhfit.report.write`.
 """
-from .main import main
+from .main import main, run
 
-__all__ = ["main"]
+__all__ = ["main", "run"]

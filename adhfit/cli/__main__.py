@@ -1,6 +1,4 @@
 """``python -m adhfit.cli``: the ``adhfit`` console script."""
-import sys
+from .main import run
 
-from .main import main
-
-sys.exit(main())
+run()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -222,8 +223,25 @@ def _build_parser() -> _Parser:
     return parser
 
 
+def run() -> None:
+    """The ``adhfit`` console script: :func:`main`, then exit without the interpreter's teardown.
+
+    Everything a command writes is closed by then; what is left is freeing the compiled engine, the
+    libraries and their modules, which takes 0.5-0.9 s after a fit for nothing.  The output streams
+    are flushed first.
+    """
+    status = main()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe: nothing more can be delivered anyway
+            pass
+    os._exit(status)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``adhfit`` console script; returns the exit status."""
+    """The command line: parse ``argv`` (default ``sys.argv[1:]``), run the command; returns the exit
+    status (:func:`run` is the console script)."""
     parser = _build_parser()
     try:
         args = parser.parse_args(argv)
