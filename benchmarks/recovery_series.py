@@ -8,14 +8,20 @@ right slip is selected / the wrong one selected / undecided, the median relative
 and for comparison the best single-curve W_ad interval width of the same curves.
 
 Usage: python benchmarks/recovery_series.py N [--noise 0.01,0.02] [--slips no-slip,frictionless]
-           [--profile] [-o benchmarks/results/recovery_series.md]
+           [--profile] [--workers 2] [-o benchmarks/results/recovery_series.md]
+
+Replicates run in order (replicate 0 of every cell, then replicate 1, ...), so a partial run (the
+table is rewritten after every series) is balanced over the cells.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
+import subprocess
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +49,9 @@ def one(slip: str, noise: float, seed: int, profile: bool) -> list[dict]:
         for name, true in TRUE.items():
             e = r.parameters[name]
             lo, hi = e.ci95 if e.ci95 is not None else (None, None)
-            rec[name] = {"rel_error": e.value / true - 1.0, "status": e.status,
+            se = e.stderr if e.stderr else None
+            rec[name] = {"rel_error": e.value / true - 1.0, "status": e.status, "value": e.value, "stderr": se,
+                         "z": None if se is None else (e.value - true) / se,
                          "covered": (lo is None or lo <= true) and (hi is None or true <= hi) and e.status != "undetermined",
                          "rel_width": None if lo is None or hi is None else (hi - lo) / e.value}
         widths = [(c["alone"]["work_of_adhesion"]["ci95"][1] - c["alone"]["work_of_adhesion"]["ci95"][0])
@@ -53,6 +61,10 @@ def one(slip: str, noise: float, seed: int, profile: bool) -> list[dict]:
         rec["flags"] = sum(bool(c["flags"]) for c in r.curves)
         out.append(rec)
     return out
+
+
+def _one(job: tuple) -> list[dict]:
+    return one(*job)
 
 
 def table(rows: list[dict]) -> str:
@@ -84,15 +96,21 @@ def main(argv=None) -> int:
     ap.add_argument("--slips", default="no-slip,frictionless")
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--seed0", type=int, default=13_000)
+    ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("-o", "--output", type=Path, default=None)
     args = ap.parse_args(argv)
     rows = []
-    for slip in args.slips.split(","):
-        for noise in map(float, args.noise.split(",")):
-            for i in range(args.n):
-                rows += one(slip, noise, args.seed0 + i, args.profile)
-                print(json.dumps(rows[-2:], default=str), file=sys.stderr, flush=True)
-                _write(args, argv, rows)  # after every replicate: a long run leaves its partial table
+    plan = [(slip, noise, args.seed0 + i, args.profile) for i in range(args.n)
+            for slip in args.slips.split(",") for noise in map(float, args.noise.split(","))]
+    pool = ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("fork")) \
+        if args.workers > 1 else None
+    results = pool.map(_one, plan) if pool is not None else map(_one, plan)
+    for got in results:
+        rows += got
+        print(json.dumps(got, default=str), file=sys.stderr, flush=True)
+        _write(args, argv, rows)  # after every series: a long run leaves its partial table
+    if pool is not None:
+        pool.shutdown()
     print(table(rows))
     return 0
 
@@ -102,10 +120,12 @@ def _write(args, argv, rows) -> None:
         return
     cmd = "python benchmarks/recovery_series.py " + " ".join(argv if argv is not None else sys.argv[1:])
     secs = np.median([r["seconds"] for r in rows])
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                            cwd=Path(__file__).parent).stdout.strip()
     args.output.write_text(f"# Recovery of series fits (issue 13)\n\nCommand: `PYTHONPATH=. {cmd}`\n\n"
                            f"{__doc__.split(chr(10) + chr(10))[1]}\n\n{table(rows)}\n\nIntervals: "
                            f"{'likelihood profile' if args.profile else 'covariance'}; median wall time per "
-                           f"global fit {secs:.0f} s (2 shared cores, loaded).\n", encoding="utf-8")
+                           f"global fit {secs:.0f} s (2 shared cores, loaded); commit {commit}.\n", encoding="utf-8")
     args.output.with_suffix(".json").write_text(json.dumps(rows, indent=1, default=str), encoding="utf-8")
 
 
