@@ -39,7 +39,7 @@ from .series import (Member, SeriesParametrisation, noise_floor, radius_data, ra
 from .starts import noise_estimate
 from .summary import Z95, _from_profile, summarize
 
-__all__ = ["fit_global", "SeriesFit"]
+__all__ = ["fit_global", "SeriesFit", "joint_stage", "JointStage"]
 
 #: stop re-estimating the noise levels when none moves by more than this fraction
 SIGMA_RTOL = 0.02
@@ -305,7 +305,7 @@ def _decide(fits: dict) -> dict:
 def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma: float | None = None,
                sigma_contact_radius: float | None = None, contact_radius: bool = True,
                fit_x_offset: bool | None = None, fit_force_offset: bool = True, seed: int | None = None,
-               points: int = DEFAULT_POINTS, profile: bool = True) -> FitResult:
+               points: int = DEFAULT_POINTS, profile: bool = True, mcmc: dict | None = None) -> FitResult:
     """Fit one W_ad, one μh and one slip condition to a series of curves (offsets per curve).
 
     Parameters
@@ -316,8 +316,8 @@ def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma
         Each curve's scene: geometry and its own fixed pressure or gap.
     slip : {"auto", "no-slip", "frictionless"}
         ``"auto"`` fits both and compares them on the joint fit.
-    method : {"lsq"}
-        Least squares (MCMC of a series is not available in this version).
+    method : {"lsq", "mcmc"}
+        Least squares, or the posterior sampled by MCMC (:func:`.global_mcmc.fit_global_mcmc`).
     sigma : float, optional
         Force noise, N, for every curve; default: estimated per curve.
     sigma_contact_radius : float, optional
@@ -327,11 +327,14 @@ def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma
     fit_x_offset, fit_force_offset : bool
         As in :func:`~.fit.fit_curve`, per curve.
     seed : int, optional
-        Recorded only.
+        Recorded (least squares); the root seed of every random number (MCMC).
     points : int
         Rows per computed history.
     profile : bool
-        Profile-likelihood intervals of the shared W_ad and μh of the reported slip condition.
+        Profile-likelihood intervals of the shared W_ad and μh of the reported slip condition (least squares).
+    mcmc : dict, optional
+        With ``method="mcmc"``: ``outdir``, ``workers``, ``progress`` and sampler settings
+        (:data:`.global_mcmc.DEFAULTS`).
 
     Returns
     -------
@@ -340,8 +343,34 @@ def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma
     """
     from .series_checks import assemble  # noqa: PLC0415
     t0 = time.perf_counter()
-    if method != "lsq":
-        raise InputError("method", method, "'lsq' (a global MCMC fit is not available in this version)")
+    if method not in ("lsq", "mcmc"):
+        raise InputError("method", method, "'lsq' or 'mcmc'")
+    if method == "mcmc":
+        from .global_mcmc import fit_global_mcmc  # noqa: PLC0415
+        return fit_global_mcmc(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_contact_radius,
+                               contact_radius=contact_radius, fit_x_offset=fit_x_offset,
+                               fit_force_offset=fit_force_offset, seed=seed, points=points, **(mcmc or {}))
+    stage = joint_stage(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_contact_radius,
+                        contact_radius=contact_radius, fit_x_offset=fit_x_offset,
+                        fit_force_offset=fit_force_offset, points=points, profile=profile)
+    return assemble(stage.curves, stage.scenes, stage.joint, stage.fits, stage.verdict, stage.singles,
+                    options=stage.options, seed=seed, t0=t0)
+
+
+class JointStage:
+    """What the least-squares stage of a global fit found (inputs, joint fits per slip, verdict)."""
+
+    def __init__(self, curves, scenes, joint, fits, verdict, singles, options):
+        self.curves, self.scenes, self.joint, self.fits = curves, scenes, joint, fits
+        self.verdict, self.singles, self.options = verdict, singles, options
+
+
+def joint_stage(curves, scenes, *, slip: str = "auto", sigma: float | None = None,
+                sigma_contact_radius: float | None = None, contact_radius: bool = True,
+                fit_x_offset: bool | None = None, fit_force_offset: bool = True,
+                points: int = DEFAULT_POINTS, profile: bool = True) -> JointStage:
+    """Steps 1–4 of the module docstring for every slip condition, and the ΔBIC verdict (the least-squares
+    global fit, and the start of a global MCMC fit).  Arguments as for :func:`fit_global`."""
     if slip not in SLIP_CHOICES:
         raise InputError("slip", slip, "one of " + ", ".join(map(repr, SLIP_CHOICES)))
     _positive("sigma", sigma)
@@ -364,9 +393,7 @@ def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma
         fits[wanted] = _slipfit(joint[wanted], profile=True)
         verdict = dict(_decide(fits), parameters_from=wanted)
     singles_summary = {s: [summarize(r, profile=False) for r in singles[s]] for s in slips}
-    return assemble(curves, scenes, joint, fits, verdict, singles_summary,
-                    options={"slip": slip, "sigma": sigma, "sigma_contact_radius": sigma_contact_radius,
-                             "contact_radius": contact_radius, "fit_x_offset": fit_x_offset,
-                             "fit_force_offset": fit_force_offset, "points": points, "profile": profile},
-                    seed=seed, t0=t0)
-
+    options = {"slip": slip, "sigma": sigma, "sigma_contact_radius": sigma_contact_radius,
+               "contact_radius": contact_radius, "fit_x_offset": fit_x_offset,
+               "fit_force_offset": fit_force_offset, "points": points, "profile": profile}
+    return JointStage(curves, scenes, joint, fits, verdict, singles_summary, options)

@@ -11,8 +11,9 @@ What a reviewer asks of a series fit, per curve:
   units of the joint standard errors; and the Hausman statistic Δᵀ(C_{-k} - C)⁻¹Δ, which is χ²(2) when
   the curve agrees with the others.  Flagged when its p-value is below :data:`PULL_P` (0.1 %); with
   three or more curves only on the most discordant curve (:func:`_pull_flags`);
-* what the curve contributes: the standard errors of the shared values without it, and its own
-  single-curve estimates.
+* what the curve contributes: the standard errors of the shared values without it, the share of the
+  shared values' precision it brings (``contribution`` = 1 - se²/se²_without, linearised: 0 for a curve
+  that adds nothing, near 1 for one that carries the fit alone), and its own single-curve estimates.
 """
 from __future__ import annotations
 
@@ -120,9 +121,13 @@ def leave_one_out(sf) -> list[dict]:
         delta = step[s_idx] - step_full[shared]
         c_w = cov[np.ix_(s_idx, s_idx)]
         stat = float(delta @ np.linalg.pinv(c_w - c_full) @ delta)
+        sw = np.sqrt(np.clip(np.diag(c_w), 0.0, None))
         out.append({"shift_in_stderr": {"work_of_adhesion": float(delta[0] / se[0]), "mu_h": float(delta[1] / se[1])},
-                    "stderr_without": {"work_of_adhesion": float(math.sqrt(max(c_w[0, 0], 0.0))),
-                                       "mu_h": float(math.sqrt(max(c_w[1, 1], 0.0)))},
+                    "stderr_without": {"work_of_adhesion": float(sw[0]), "mu_h": float(sw[1])},
+                    "stderr_joint": {"work_of_adhesion": float(se[0]), "mu_h": float(se[1])},
+                    # the share of the shared value's precision (1/se²) that this curve brings
+                    "contribution": {k: float(1.0 - (se[j] / sw[j]) ** 2) if sw[j] > 0 else None
+                                     for j, k in enumerate(("work_of_adhesion", "mu_h"))},
                     "stderr_note": "of ln W_ad and ln μh (relative standard errors)",
                     "chi2": stat, "p_value": float(stats.chi2.sf(stat, 2))})
     return out
