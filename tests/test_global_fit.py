@@ -71,6 +71,28 @@ def test_cli_global_writes_report_with_curves(report):
     assert d["offsets"]["displacement"]["status"] == "per_curve"
 
 
+def test_report_html_and_md_show_shared_values_slip_and_every_curve(report):
+    """report.html is self-contained (no external resource) and shows what a reader looks for: the shared
+    values with their intervals and status, the slip verdict, one row per curve (its scene pressure, its
+    χ²/n, its pull), the embedded figure; report.md carries the same table."""
+    import re
+    d, out = report
+    page = (out / "report.html").read_text(encoding="utf-8")
+    assert not re.search(r"(src|href)=\"(https?:|//|file:)", page)
+    assert page.count("data:image/png;base64,") == 1
+    w = d["parameters"]["work_of_adhesion"]
+    assert f"{w['ci95'][0]:.4g}" in page and f"{w['ci95'][1]:.4g}" in page and "determined" in page
+    assert d["slip"]["verdict"] in page
+    md = (out / "report.md").read_text(encoding="utf-8")
+    for c in d["curves"]:
+        kpa = f"P = {c['scene']['pressure'] / 1e3:g} kPa"
+        assert kpa in page and kpa in md
+        assert f"{c['redchi']:.3g}" in md
+        share = c["leave_one_out"]["contribution"]["work_of_adhesion"]
+        assert 0.0 <= share <= 1.0  # a share of the precision: 1 - se²/se²_without with se <= se_without
+    assert md.count("\n| ") >= 3 + 2 + 2  # curves table, shared values, slip table (rows incl. headers)
+
+
 def test_shared_values_recovered_and_covered(report):
     d, _ = report
     for name, true in TRUE.items():
@@ -138,7 +160,7 @@ def test_bad_input_is_one_clear_error():
     with pytest.raises(InputError, match="sigma_contact_radius"):
         fit_global([curve, curve], scene, sigma_contact_radius=-1.0)
     with pytest.raises(InputError, match="method"):
-        fit_global([curve, curve], scene, method="mcmc")
+        fit_global([curve, curve], scene, method="bayes")
 
 
 @pytest.mark.slow
