@@ -67,6 +67,30 @@ def _one(job: tuple) -> list[dict]:
     return one(*job)
 
 
+def _z(g: list[dict], name: str) -> str:
+    z = np.array([r[name]["z"] for r in g if r[name].get("z") is not None])
+    return "–" if z.size < 2 else f"{z.mean():+.2f} ± {z.std(ddof=1) / np.sqrt(z.size):.2f} ({z.std(ddof=1):.2f})"
+
+
+def pooled(rows: list[dict]) -> str:
+    """Coverage and z = (estimate - truth)/stderr pooled per observables: a bias shows as a mean z away
+    from 0 (± its standard error), intervals too narrow as an sd of z above 1 and coverage below 95 %."""
+    from scipy import stats  # noqa: PLC0415
+    lines = ["| observables | n | W_ad cover | W_ad z: mean ± se (sd) | μh cover | μh z: mean ± se (sd) |",
+             "|---|---|---|---|---|---|"]
+    for radius in (True, False):
+        g = [r for r in rows if r["radius"] == radius and "z" in r["work_of_adhesion"]]
+        if not g:
+            continue
+        cells = []
+        for name in TRUE:
+            k = sum(r[name]["covered"] for r in g)
+            low = stats.binom.ppf(0.01, len(g), 0.95)
+            cells += [f"{k}/{len(g)} ({100 * k / len(g):.0f} %){' !' if k < low else ''}", _z(g, name)]
+        lines.append(f"| {'force + contact radius' if radius else 'force'} | {len(g)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def table(rows: list[dict]) -> str:
     lines = ["| truth | noise | observables | n | W_ad median err | W_ad worst | W_ad cover | μh median err | "
              "μh cover | right slip | wrong | undecided | W_ad 95 % width (median) | best single width | curves flagged |",
@@ -98,7 +122,12 @@ def main(argv=None) -> int:
     ap.add_argument("--seed0", type=int, default=13_000)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("-o", "--output", type=Path, default=None)
+    ap.add_argument("--from-json", type=Path, default=None, help="re-render the tables of a finished run")
     args = ap.parse_args(argv)
+    if args.from_json is not None:
+        rows = json.loads(args.from_json.read_text(encoding="utf-8"))
+        print(table(rows) + "\n\n" + pooled(rows))
+        return 0
     rows = []
     plan = [(slip, noise, args.seed0 + i, args.profile) for i in range(args.n)
             for slip in args.slips.split(",") for noise in map(float, args.noise.split(","))]
@@ -123,7 +152,7 @@ def _write(args, argv, rows) -> None:
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                             cwd=Path(__file__).parent).stdout.strip()
     args.output.write_text(f"# Recovery of series fits (issue 13)\n\nCommand: `PYTHONPATH=. {cmd}`\n\n"
-                           f"{__doc__.split(chr(10) + chr(10))[1]}\n\n{table(rows)}\n\nIntervals: "
+                           f"{__doc__.split(chr(10) + chr(10))[1]}\n\n{table(rows)}\n\n{pooled(rows)}\n\nIntervals: "
                            f"{'likelihood profile' if args.profile else 'covariance'}; median wall time per "
                            f"global fit {secs:.0f} s (2 shared cores, loaded); commit {commit}.\n", encoding="utf-8")
     args.output.with_suffix(".json").write_text(json.dumps(rows, indent=1, default=str), encoding="utf-8")
