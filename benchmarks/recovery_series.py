@@ -54,6 +54,8 @@ def one(slip: str, noise: float, seed: int, profile: bool) -> list[dict]:
                          "z": None if se is None else (e.value - true) / se,
                          "covered": (lo is None or lo <= true) and (hi is None or true <= hi) and e.status != "undetermined",
                          "rel_width": None if lo is None or hi is None else (hi - lo) / e.value}
+            cov = e.ci95_covariance
+            rec[name]["covered_covariance"] = None if cov is None else bool(cov[0] <= true <= cov[1])
         widths = [(c["alone"]["work_of_adhesion"]["ci95"][1] - c["alone"]["work_of_adhesion"]["ci95"][0])
                   / c["alone"]["work_of_adhesion"]["optimum"] for c in r.curves
                   if c["alone"]["work_of_adhesion"]["ci95"] and None not in c["alone"]["work_of_adhesion"]["ci95"]]

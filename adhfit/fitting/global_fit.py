@@ -15,7 +15,8 @@ Procedure, per slip condition:
    uses (:mod:`.selection`: same ΔBIC scale and verdict words as a single fit);
 4. **the row split** is re-checked at the joint optimum (a curve whose pull-off row moves is refitted).
 
-Intervals: lmfit's covariance (residuals in units of σ, not rescaled) and, for the reported slip
+Intervals: the covariance from a secant Jacobian at the scale of each parameter's uncertainty
+(:mod:`.global_secant`; residuals in units of σ, not rescaled) and, for the reported slip
 condition, the likelihood profile with the χ²(1) critical value; the same ``status`` rules as a single
 fit (docs/contracts.md A5b).  Per-curve checks are in :mod:`.series_checks`.
 """
@@ -27,13 +28,13 @@ import time
 import numpy as np
 
 from ..errors import InputError
+from .global_secant import apply_secant
 from .lsq import FINE_TOL, COARSE_TOL, fit_slip, minimise
 from .model import CurveModel, ModelDomainError, Segments, segment
 from .options import DEFAULT_POINTS, SLIP_CHOICES
 from .profile import one_side, profile_interval
 from .residual_checks import correlation_factor, widen
 from .result import Estimate, FitResult, SlipFit
-from .selection import compare
 from .series import (Member, SeriesParametrisation, noise_floor, radius_data, radius_prediction,
                      series_residual, split_blocks)
 from .starts import noise_estimate
@@ -249,7 +250,9 @@ def _joint(slip, curves, scenes, segs, singles, sigma, sigma_a, use_radius, poin
         if not moved:
             break
         best = minimise(series_residual(members, spar), best.params, scale_covar=False, tol=FINE_TOL)
-    return SeriesFit(slip, members, spar, best, singles, given)
+    sf = SeriesFit(slip, members, spar, best, singles, given)
+    apply_secant(sf)  # standard errors at the scale of the data (a row at a curve's fold: global_secant)
+    return sf
 
 
 def _estimates(sf: SeriesFit, profile: bool) -> tuple[dict, dict]:
@@ -295,11 +298,6 @@ def _slipfit(sf: SeriesFit, profile: bool) -> SlipFit:
                    profile=info, n_evaluations=sum(m.model.n_evaluations for m in sf.members), n_histories=hist,
                    success=bool(sf.best.success), message=str(sf.best.message), raw=sf,
                    diagnostics=(), autocorrelation=rho, widening=factor)
-
-
-def _decide(fits: dict) -> dict:
-    from .fit import _decide as decide  # noqa: PLC0415 - one verdict rule for single and global fits
-    return decide(fits)
 
 
 def fit_global(curves, scenes, *, slip: str = "auto", method: str = "lsq", sigma: float | None = None,
@@ -371,6 +369,7 @@ def joint_stage(curves, scenes, *, slip: str = "auto", sigma: float | None = Non
                 points: int = DEFAULT_POINTS, profile: bool = True) -> JointStage:
     """Steps 1–4 of the module docstring for every slip condition, and the ΔBIC verdict (the least-squares
     global fit, and the start of a global MCMC fit).  Arguments as for :func:`fit_global`."""
+    from .fit import _decide  # noqa: PLC0415 - one verdict rule for single and global fits
     if slip not in SLIP_CHOICES:
         raise InputError("slip", slip, "one of " + ", ".join(map(repr, SLIP_CHOICES)))
     _positive("sigma", sigma)

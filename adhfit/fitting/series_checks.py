@@ -57,12 +57,18 @@ def curve_rows(sf) -> list[dict]:
     return out
 
 
-def _jacobian(residual, params) -> tuple[np.ndarray, list[str], np.ndarray]:
-    """Forward-difference Jacobian of the joint residual at ``params`` (varying parameters only)."""
+def _jacobian(residual, params, steps=None) -> tuple[np.ndarray, list[str], np.ndarray]:
+    """Jacobian of the joint residual at ``params`` (varying parameters only): central secants over
+    ± ``steps`` (the fit's secant steps, :mod:`.global_secant`) when given, else forward differences."""
     names = [n for n, p in params.items() if p.vary]
     r0 = residual(params)
     jac = np.empty((r0.size, len(names)))
     for k, n in enumerate(names):
+        if steps is not None:
+            hi, lo = params.copy(), params.copy()
+            hi[n].value, lo[n].value = params[n].value + steps[k], params[n].value - steps[k]
+            jac[:, k] = (residual(hi) - residual(lo)) / (2.0 * steps[k])
+            continue
         p = params.copy()
         h = 1e-5 * max(1.0, abs(p[n].value))
         if p[n].value + h > p[n].max:
@@ -101,7 +107,7 @@ def leave_one_out(sf) -> list[dict]:
     Linearised at the optimum, with every block weighted by its reference noise
     (:func:`_reference_weights`): Δ is the difference of the Gauss–Newton steps with and without the
     curve's rows (and its offsets)."""
-    jac, names, r = _jacobian(sf.residual, sf.best.params)
+    jac, names, r = _jacobian(sf.residual, sf.best.params, getattr(sf, "secant_steps", None))
     w = _reference_weights(sf, r.size)
     jac, r = jac * w[:, None], r * w
     shared = [names.index("ln_work_of_adhesion"), names.index("ln_mu_h")]
