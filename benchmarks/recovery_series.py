@@ -76,10 +76,13 @@ def _z(g: list[dict], name: str) -> str:
 
 def pooled(rows: list[dict]) -> str:
     """Coverage and z = (estimate - truth)/stderr pooled per observables: a bias shows as a mean z away
-    from 0 (± its standard error), intervals too narrow as an sd of z above 1 and coverage below 95 %."""
+    from 0 (± its standard error), intervals too narrow as an sd of z above 1 and coverage below 95 %
+    (``!``: below the 1 % binomial quantile); with ``--profile`` also the covariance intervals' coverage."""
     from scipy import stats  # noqa: PLC0415
-    lines = ["| observables | n | W_ad cover | W_ad z: mean ± se (sd) | μh cover | μh z: mean ± se (sd) |",
-             "|---|---|---|---|---|---|"]
+    cov = any(r["work_of_adhesion"].get("covered_covariance") is not None for r in rows)
+    lines = ["| observables | n | W_ad cover | W_ad z: mean ± se (sd) | μh cover | μh z: mean ± se (sd) |"
+             + (" W_ad cover (covariance) | μh cover (covariance) |" if cov else ""),
+             "|---|---|---|---|---|---|" + ("---|---|" if cov else "")]
     for radius in (True, False):
         g = [r for r in rows if r["radius"] == radius and "z" in r["work_of_adhesion"]]
         if not g:
@@ -89,6 +92,10 @@ def pooled(rows: list[dict]) -> str:
             k = sum(r[name]["covered"] for r in g)
             low = stats.binom.ppf(0.01, len(g), 0.95)
             cells += [f"{k}/{len(g)} ({100 * k / len(g):.0f} %){' !' if k < low else ''}", _z(g, name)]
+        if cov:
+            for name in TRUE:
+                k = sum(bool(r[name].get("covered_covariance")) for r in g)
+                cells.append(f"{k}/{len(g)} ({100 * k / len(g):.0f} %)")
         lines.append(f"| {'force + contact radius' if radius else 'force'} | {len(g)} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
