@@ -19,8 +19,8 @@ import pytest
 
 from adhfit.errors import InputError
 from adhfit.fitting.global_fit import fit_global
-from adhfit.fitting.series import radius_data, radius_prediction
 from adhfit.fitting.model import CurveModel, Segments
+from adhfit.fitting.series import radius_data, radius_prediction
 from adhfit.fitting.synthetic_series import synthetic_series
 from adhfit.scene import load_scene
 

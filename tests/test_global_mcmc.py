@@ -18,10 +18,15 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from adhfit.fitting.global_mcmc import SeriesTarget, series_priors
+from adhfit.fitting.global_mcmc import SeriesTarget
 from adhfit.fitting.lsq import Parametrisation
 from adhfit.fitting.model import CurveModel, Segments
-from adhfit.fitting.series import Member, SeriesParametrisation, radius_data, radius_prediction
+from adhfit.fitting.series import (
+    Member,
+    SeriesParametrisation,
+    radius_data,
+    radius_prediction,
+)
 from adhfit.fitting.synthetic_series import synthetic_series
 from adhfit.scene import load_scene
 
@@ -60,7 +65,7 @@ def _members(series, sigma_a):
         model = CurveModel(curve, scene, "no-slip", segments=seg, fixed_split=True)
         par = Parametrisation(x_scale=float(np.ptp(curve.x)), f_scale=float(np.max(np.abs(curve.force))),
                               control="displacement", fit_x_offset=True, fit_force_offset=True)
-        out.append((Member(model=model, par=par, sigma_f=truth["sigma"] if "sigma" in truth else 1e-5,
+        out.append((Member(model=model, par=par, sigma_f=truth.get("sigma", 1e-5),
                            radius=radius_data(curve), sigma_a=sigma_a), truth))
     return out
 
@@ -107,9 +112,9 @@ def test_likelihood_is_the_sum_of_independent_gaussian_blocks():
     for r, s in blocks:  # substitute σ = s·e^t: ∫ L(σ)/σ dσ = ∫ L(s e^t) dt
         ss, n = float(r @ r), r.size
         t_peak = 0.5 * math.log(ss / (n * s**2))  # the integrand's peak (σ² = ss/n)
-        g = lambda t: -0.5 * ss / (s * math.exp(t)) ** 2 - n * (math.log(s) + t)  # noqa: E731
+        g = lambda t, ss=ss, s=s, n=n: -0.5 * ss / (s * math.exp(t)) ** 2 - n * (math.log(s) + t)
         m = g(t_peak)  # scale for stability
-        val, _ = integrate.quad(lambda t: math.exp(g(t) - m), t_peak - 4.0, t_peak + 4.0, epsabs=0,
+        val, _ = integrate.quad(lambda t, g=g, m=m: math.exp(g(t) - m), t_peak - 4.0, t_peak + 4.0, epsabs=0,
                                 epsrel=1e-10, limit=200)
         total += math.log(val) + m - 0.5 * n * math.log(2 * math.pi)
     assert unknown.log_likelihood(theta) == pytest.approx(total, rel=1e-7)

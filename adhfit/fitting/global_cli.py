@@ -66,6 +66,7 @@ _CAPTION = ("Every curve (dots) with the shared fit (lines); below, each curve's
 def write_series_reports(result, out: Path, *, plot: bool = True) -> None:
     """report.md, fit.png (``plot``) and report.html (the figure embedded) of a global fit into ``out``."""
     import json  # noqa: PLC0415
+
     from ..report.series_html import write_series_html  # noqa: PLC0415
     from ..report.series_markdown import write_series_markdown  # noqa: PLC0415
     d = json.loads((out / "report.json").read_text(encoding="utf-8"))  # exactly what report.json says

@@ -29,18 +29,25 @@ import numpy as np
 
 from ..errors import InputError
 from .global_secant import apply_secant
-from .lsq import FINE_TOL, COARSE_TOL, fit_slip, minimise
+from .lsq import COARSE_TOL, FINE_TOL, fit_slip, minimise
 from .model import CurveModel, ModelDomainError, Segments, segment
 from .options import DEFAULT_POINTS, SLIP_CHOICES
 from .profile import one_side, profile_interval
 from .residual_checks import correlation_factor, widen
 from .result import Estimate, FitResult, SlipFit
-from .series import (Member, SeriesParametrisation, noise_floor, radius_data, radius_prediction,
-                     series_residual, split_blocks)
+from .series import (
+    Member,
+    SeriesParametrisation,
+    noise_floor,
+    radius_data,
+    radius_prediction,
+    series_residual,
+    split_blocks,
+)
 from .starts import noise_estimate
 from .summary import Z95, _from_profile, summarize
 
-__all__ = ["fit_global", "SeriesFit", "joint_stage", "JointStage"]
+__all__ = ["JointStage", "SeriesFit", "fit_global", "joint_stage"]
 
 #: stop re-estimating the noise levels when none moves by more than this fraction
 SIGMA_RTOL = 0.02

@@ -14,7 +14,10 @@ The single-curve MCMC (:mod:`.mcmc_fit`) on the joint model of :mod:`.series`:
    per curve (the shared values' prior from the joint least-squares estimates of both slip
    conditions, or the scenes' ``[priors]``, which must then agree).
 3. **slip condition**: each evidence by importance sampling (:mod:`.evidence`); model probabilities
-   and the verdict as for one curve; undecided -> the reported estimates average both posteriors.
+   and the verdict as for one curve; undecided -> the reported estimates average both posteriors.  A
+   condition the joint least-squares fit already rejects (ΔBIC > :data:`REJECT_DBIC`) gets a short run
+   (:data:`SHORT_RUN` steps) for its evidence; its chains need not converge when its probability stays
+   below 1e-6 (the misfit posterior of the wrong condition is what mixes slowly).
 4. **estimates**: posterior median, sd and 2.5/97.5 percentiles of the shared W_ad and μh (status from
    the prior edges, as for one curve); each curve's offsets likewise in ``curves[].offsets``.  The
    per-curve checks (χ², pull, contribution) are the least-squares joint fit's.
@@ -26,188 +29,46 @@ import math
 import time
 
 import numpy as np
-from scipy import special
 
 from ..errors import InputError
 from .diagnostics import diagnose
 from .evidence import StudentT, importance_evidence, model_probabilities
-from .lsq import PENALTY
+from .global_posterior import SHARED, SeriesTarget, checked_covariance, series_priors
 from .mcmc import ParallelMap, default_workers, sample_posterior
 from .mcmc_fit import CI_METHOD, McmcFitResult, _estimates, _mixture, _verdict
 from .model import OFFSET_NAME
 from .options import DEFAULT_POINTS
-from .posterior import Prior, default_priors
 from .selection import compare
-from .series import Values, block_sizes, series_residual
 
-__all__ = ["SeriesTarget", "series_priors", "fit_global_mcmc", "DEFAULTS"]
+__all__ = ["DEFAULTS", "SeriesTarget", "checked_covariance", "fit_global_mcmc", "series_priors"]
 
 #: run settings: n_walkers is raised to 2·ndim (16 for three curves), so two ensembles make the 32 walkers a
 #: step of the single-curve default (4 x 8); R-hat compares the two independent ensembles
 DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 15, "check_every": 5, "max_steps": 300,
             "evidence_draws": 300}
-SHARED = ("work_of_adhesion", "mu_h")
+
+#: a slip condition whose joint least-squares BIC is this far above the other's (a Bayes factor near
+#: e^-50) gets a short run (:data:`SHORT_RUN` steps): enough for its evidence, whose only use is to
+#: confirm the verdict; its chains are not required to converge (:func:`_converged`)
+REJECT_DBIC = 100.0
+SHORT_RUN = 60
 
 
-class SeriesTarget:
-    """Log prior, log likelihood and log posterior of one slip condition's joint fit, in θ.
-
-    The same interface as :class:`.posterior.Target` (``names``, ``ndim``, ``priors``, ``log_prior``,
-    ``log_likelihood``, ``__call__``, ``to_si``), so the sampler and the evidence take either.
-
-    Parameters
-    ----------
-    sf : SeriesFit
-        The least-squares joint fit (members with their settled σ's, row splits, parametrisation).
-    names : list of str
-        SI names of θ's coordinates (offsets suffixed with the curve's index).
-    priors : list of Prior
-        One per coordinate.
-    """
-
-    def __init__(self, sf, names: list[str], priors: list[Prior]) -> None:
-        self.internal = list(sf.best.var_names)
-        if len(names) != len(self.internal) or len(priors) != len(names):
-            raise ValueError(f"{len(names)} names and {len(priors)} priors for {len(self.internal)} parameters")
-        self.names, self.priors, self.given = list(names), list(priors), dict(sf.given)
-        self._residual = series_residual(sf.members, sf.spar)
-        self.blocks = []  # (start, stop, σ, σ given)
-        k = 0
-        for m, (nf, na) in zip(sf.members, block_sizes(sf.members)):
-            self.blocks.append((k, k + nf, m.sigma_f, sf.given["force"]))
-            if na:
-                self.blocks.append((k + nf, k + nf + na, m.sigma_a, sf.given["contact_radius"]))
-            k += nf + na
-
-    @property
-    def ndim(self) -> int:
-        return len(self.names)
-
-    @property
-    def noise_model(self) -> str:
-        known = [k for k, v in self.given.items() if v]
-        head = "Gaussian, one sigma per curve and observable"
-        if len(known) == len(self.given):
-            return head + ", all given"
-        tail = "integrated out analytically under p(sigma) ∝ 1/sigma (block by block)"
-        return head + (f"; {', '.join(known)} given, the others " if known else "; ") + tail
-
-    def log_prior(self, theta: np.ndarray) -> float:
-        total = 0.0
-        for prior, t in zip(self.priors, theta):
-            total += prior.logpdf(float(t))
-            if total == -math.inf:
-                break
-        return total
-
-    def residual(self, theta: np.ndarray) -> np.ndarray:
-        """The joint least-squares residual at θ (each block in units of its σ)."""
-        return self._residual(Values(zip(self.internal, map(float, theta))))
-
-    def log_likelihood(self, theta: np.ndarray) -> float:
-        r = self.residual(theta)
-        if np.any(r == PENALTY):  # a curve outside the model's domain (the residual's marker)
-            return -math.inf
-        total = 0.0
-        for lo, hi, sigma, given in self.blocks:
-            ss, n = float(r[lo:hi] @ r[lo:hi]), hi - lo
-            if given:
-                total += -0.5 * ss - 0.5 * n * math.log(2.0 * math.pi * sigma**2)
-            else:
-                total += math.log(0.5) + special.gammaln(0.5 * n) - 0.5 * n * math.log(math.pi * ss * sigma**2)
-        return total
-
-    def __call__(self, theta: np.ndarray) -> float:
-        """ln posterior (unnormalised): what emcee samples."""
-        lp = self.log_prior(theta)
-        if lp == -math.inf:
-            return -math.inf
-        ll = self.log_likelihood(theta)
-        return lp + ll if math.isfinite(ll) else -math.inf
-
-    def to_si(self, theta: np.ndarray) -> np.ndarray:
-        """θ samples (..., ndim) -> SI values of ``self.names``."""
-        theta = np.asarray(theta, float)
-        out = np.empty_like(theta)
-        for k, prior in enumerate(self.priors):
-            out[..., k] = np.exp(theta[..., k]) if prior.log else theta[..., k] * prior.factor
-        return out
+def _rejected(joint_bic: dict) -> set:
+    best = min(joint_bic.values())
+    return {s for s, b in joint_bic.items() if b - best > REJECT_DBIC}
 
 
-def _scene_priors(scenes) -> dict:
-    first = dict(scenes[0].priors)
-    for sc in scenes[1:]:
-        if dict(sc.priors) != first:
-            raise InputError("[priors]", f"{sc.source}", "the same [priors] table in every curve's scene "
-                             "(the shared W_ad and μh have one prior); remove it or make them agree")
-    return first
+def _converged(diags: dict, probs: dict, rejected: set) -> bool:
+    """Every condition's chains converged, except a rejected one (:data:`REJECT_DBIC`) whose posterior
+    probability stays below 1e-6 even with its log evidence raised by 20 Monte-Carlo standard errors."""
+    p = probs["probabilities"]
+    se = probs.get("log_bayes_factor_stderr") or 0.0
+    return all(d["converged"] or (s in rejected and p[s] * math.exp(min(20.0 * se, 50.0)) < 1e-6)
+               for s, d in diags.items())
 
 
-def series_priors(joint: dict, scenes) -> tuple[list[str], list[Prior]]:
-    """Coordinate names and priors of the joint posterior (the same for every slip condition).
-
-    Per curve :func:`.posterior.default_priors` with that curve's least-squares offsets and the joint
-    W_ad and μh of every slip condition; the shared values' priors are curve 0's (they use only the
-    shared estimates, so every curve gives the same)."""
-    scene_priors = _scene_priors(scenes)
-    first = next(iter(joint.values()))
-    si = [sf.spar.si(sf.best.params) for sf in joint.values()]
-    names, priors = [], []
-    for i, m in enumerate(first.members):
-        pri = default_priors(m.par, [{**shared, **offs[i]} for shared, offs in si], scene_priors)
-        for name in m.par.names:
-            if name in SHARED and i > 0:
-                continue
-            names.append(name if name in SHARED else f"{name}_{i}")
-            priors.append(pri[name])
-    return names, priors
-
-
-#: the start covariance's scale along a coordinate is corrected when the posterior's own curvature
-#: differs from it by more than this factor (either way)
-SCALE_CHECK = 2.0
-
-
-def checked_covariance(target, theta0: np.ndarray, cov0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The start covariance with every coordinate's scale checked against the log posterior itself.
-
-    Least squares gives the covariance from a finite-difference Jacobian; a kink in the contact-radius
-    model or a rugged objective can make one standard error far too small or too large, and the
-    sampler's start ball and first proposal would inherit it.  Along each coordinate k the drop of the
-    log posterior d(h) = ln π(θ0) - ½[ln π(θ0 + h e_k) + ln π(θ0 - h e_k)] is evaluated at h = the
-    conditional standard deviation s_k = 1/sqrt((C⁻¹)_kk) (and once more at the new estimate);
-    a Gaussian gives d = h²/(2 s²).  Where the estimate differs from s_k by more than
-    :data:`SCALE_CHECK`, that row and column of C are rescaled (correlations kept).  Costs 2–4
-    evaluations per coordinate.
-
-    Returns
-    -------
-    (covariance, ratios) : the corrected covariance and the per-coordinate scale factors applied.
-    """
-    cov0 = np.atleast_2d(np.asarray(cov0, float))
-    lp0 = target(theta0)
-    ratio = np.ones(theta0.size)
-    if not math.isfinite(lp0):
-        return cov0, ratio
-    cond = 1.0 / np.sqrt(np.clip(np.diag(np.linalg.pinv(cov0)), 1e-300, None))
-    for k in range(theta0.size):
-        h, r, d = cond[k], 1.0, float("nan")
-        for _ in range(2):
-            e = np.zeros(theta0.size)
-            e[k] = h
-            d = lp0 - 0.5 * (target(theta0 + e) + target(theta0 - e))
-            if not math.isfinite(d):
-                break
-            est = h / math.sqrt(2.0 * d) if d > 1e-3 else 10.0 * h  # flat: look further out
-            r = float(np.clip(est / cond[k], 0.1, 30.0))
-            if abs(math.log(est / h)) < math.log(1.3):
-                break
-            h = r * cond[k]
-        ratio[k] = r if math.isfinite(d) and (r > SCALE_CHECK or r < 1.0 / SCALE_CHECK) else 1.0
-    return cov0 * np.outer(ratio, ratio), ratio
-
-
-def _run(targets, joint, cfg, root, path, pmap, progress) -> tuple[dict, dict, dict, dict]:
+def _run(targets, joint, cfg, root, path, pmap, progress, rejected=frozenset()) -> tuple[dict, dict, dict, dict]:
     """Sample and weigh every slip condition: (chains, diagnostics, SI samples, evidences)."""
     chains, diags, samples, evid = {}, {}, {}, {}
     for (s, tg), ss in zip(targets.items(), root.spawn(len(targets))):
@@ -219,8 +80,10 @@ def _run(targets, joint, cfg, root, path, pmap, progress) -> tuple[dict, dict, d
         chains[s] = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
                                      n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
                                      tune_steps=cfg["tune_steps"], check_every=cfg["check_every"],
-                                     max_steps=cfg["max_steps"], path=path, group=s, pmap=pmap, progress=progress)
+                                     max_steps=min(cfg["max_steps"], SHORT_RUN) if s in rejected else cfg["max_steps"],
+                                     path=path, group=s, pmap=pmap, progress=progress)
         diags[s] = diagnose(chains[s], tg.names)
+        diags[s]["short_run"] = s in rejected
         diags[s]["start_scale_corrections"] = {n: float(x) for n, x in zip(tg.names, ratios) if x != 1.0}
         flat = chains[s].flat
         samples[s] = tg.to_si(flat)
@@ -259,15 +122,19 @@ def _offset_entries(curves: tuple, target: SeriesTarget, samples: np.ndarray) ->
     return out
 
 
-def _warnings(lsq_result, reported, verdict, diags, probs, fits) -> list[str]:
+def _warnings(lsq_result, reported, verdict, diags, probs, fits, converged) -> list[str]:
     from .series_checks import _status_warnings  # noqa: PLC0415
     drop = ("The series cannot decide", "The series only bounds", "The series does not determine",
             "The force noise of at least one curve is correlated")
     out = [w for w in lsq_result.warnings if not w.startswith(drop)]
     bad = [s for s, d in diags.items() if not d["converged"]]
-    if bad:
+    if bad and not converged:
         out.insert(0, "MCMC NOT CONVERGED for: " + ", ".join(bad) + " — do not trust these intervals "
                       "(see the diagnostics)")
+    elif bad:
+        out.append(f"The chains of {', '.join(bad)} were a short run and did not converge: the joint least-squares "
+                   f"fit already rejects it (ΔBIC > {REJECT_DBIC:g}) and its posterior probability stays below 1e-6 "
+                   f"whatever the sampling error, so the verdict and the reported values do not depend on it.")
     if not probs["reliable"]:
         out.append("the evidence estimate is unreliable (few effective importance weights)")
     if verdict["selected"] is None and len(fits) > 1:
@@ -282,17 +149,20 @@ def _warnings(lsq_result, reported, verdict, diags, probs, fits) -> list[str]:
     return out + _status_warnings(reported)
 
 
-def _summary(targets, chains, diags, evid, probs, cfg, seed, workers, stage, path, t_lsq, n_evals) -> dict:
+def _summary(targets, chains, diags, evid, probs, cfg, seed, workers, stage, path, t_lsq, n_evals,
+             converged) -> dict:
     rep = probs["favoured"]
     mc_time = sum(c.wall_time for c in chains.values())
     mc_evals = sum(c.n_evaluations for c in chains.values())
     return {
-        "seed": seed, "noise_model": targets[rep].noise_model, "converged": all(d["converged"] for d in diags.values()),
+        "seed": seed, "noise_model": targets[rep].noise_model, "converged": converged,
         "priors": {k: p.as_dict() for k, p in zip(targets[rep].names, targets[rep].priors)},
         "settings": cfg | {"workers": workers},
         "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a tuned Student-t "
                    "(90 %) + differential evolution (10 %); see adhfit.fitting.mcmc",
-        "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap",
+        "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap "
+                         f"({SHORT_RUN} steps for a condition the least-squares fit rejects by ΔBIC > {REJECT_DBIC:g})",
+        "short_runs": sorted(s for s, d in diags.items() if d.get("short_run")),
         "likelihood": "joint: every curve's force rows (and pull-off term) and contact-radius rows, one sigma per "
                       "block; row splits fixed at the least-squares joint optimum",
         "model_probabilities": probs,
@@ -359,7 +229,8 @@ def fit_global_mcmc(curves, scenes, *, slip: str = "auto", sigma: float | None =
     run_seed, rest = root.spawn(2)
     n_workers = default_workers() if workers is None else int(workers)
     with ParallelMap(n_workers) as pmap:
-        chains, diags, samples, evid = _run(targets, stage.joint, cfg, run_seed, path, pmap, progress)
+        rejected = _rejected({s: f.bic for s, f in stage.fits.items()})
+        chains, diags, samples, evid = _run(targets, stage.joint, cfg, run_seed, path, pmap, progress, rejected)
         n_evals = pmap.n_evaluations
     probs = model_probabilities(evid)
     verdict = _verdict(probs, lsq_verdict)
@@ -371,12 +242,14 @@ def fit_global_mcmc(curves, scenes, *, slip: str = "auto", sigma: float | None =
     reported = _reported(samples, probs, verdict, fits, targets, np.random.default_rng(rest))
     lsq_result = assemble(stage.curves, stage.scenes, stage.joint, stage.fits, dict(stage.verdict, parameters_from=rep),
                           stage.singles, options=stage.options, seed=seed, t0=t0)
-    summary = _summary(targets, chains, diags, evid, probs, cfg, seed, n_workers, stage, path, t_lsq, n_evals)
+    converged = _converged(diags, probs, rejected)
+    summary = _summary(targets, chains, diags, evid, probs, cfg, seed, n_workers, stage, path, t_lsq, n_evals,
+                       converged)
     prov = dict(lsq_result.provenance, method="mcmc", options=dict(stage.options, **cfg, profile=None))
     base = {f.name: getattr(lsq_result, f.name) for f in dataclasses.fields(lsq_result)}
     base.update(method="mcmc", slip=verdict, parameters=reported, fits=fits, provenance=prov,
                 curves=tuple(_offset_entries(lsq_result.curves, targets[rep], samples[rep])),
-                warnings=tuple(_warnings(lsq_result, reported, verdict, diags, probs, fits)),
+                warnings=tuple(_warnings(lsq_result, reported, verdict, diags, probs, fits, converged)),
                 n_evaluations=lsq_result.n_evaluations + n_evals, wall_time=time.perf_counter() - t0,
                 raw=dict(lsq_result.raw, chains=chains),
                 sigma_source=lsq_result.sigma_source + "; in the posterior: " + targets[rep].noise_model)

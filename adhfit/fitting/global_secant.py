@@ -23,7 +23,7 @@ import numpy as np
 
 from .lsq import PENALTY
 
-__all__ = ["secant_covariance", "MAX_ROUNDS"]
+__all__ = ["MAX_ROUNDS", "secant_covariance"]
 
 MAX_ROUNDS = 5
 

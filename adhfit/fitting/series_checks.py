@@ -17,7 +17,6 @@ What a reviewer asks of a series fit, per curve:
 """
 from __future__ import annotations
 
-import math
 import platform
 
 import numpy as np
@@ -28,7 +27,7 @@ from .result import FitResult
 from .series import radius_prediction
 from .starts import noise_estimate
 
-__all__ = ["curve_rows", "leave_one_out", "assemble", "REDCHI_FLAG", "PULL_P"]
+__all__ = ["PULL_P", "REDCHI_FLAG", "assemble", "curve_rows", "leave_one_out"]
 
 REDCHI_FLAG = 2.0
 PULL_P = 1e-3
@@ -252,6 +251,7 @@ def _status_warnings(params: dict) -> list[str]:
 def assemble(curves, scenes, joint, fits, verdict, singles, *, options, seed, t0) -> FitResult:
     """The :class:`FitResult` of a global fit, with ``curves`` and the per-curve warnings."""
     import time  # noqa: PLC0415
+
     from .fit import _provenance, _reported  # noqa: PLC0415
     rep = verdict["parameters_from"]
     sf = joint[rep]

@@ -8,14 +8,22 @@ its residuals.  Rendered from the report.json dictionary; the figure is embedded
 from __future__ import annotations
 
 import datetime as _dt
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from .html import _estimate_row, _section_other, _section_warnings
 from .html_mcmc import section_mcmc, section_solver_details
 from .html_parts import e, figure, num, page, table, value_html
-from .series_text import (CURVE_HEADER, SLIP_HEADER, curve_label, curve_legend, curve_rows, slip_rows,
-                          width_comparison)
+from .series_text import (
+    CURVE_HEADER,
+    SLIP_HEADER,
+    curve_label,
+    curve_legend,
+    curve_rows,
+    slip_rows,
+    width_comparison,
+)
 from .text import display, estimate_text, seed_text
 
 __all__ = ["render_series_html", "write_series_html"]
@@ -30,7 +38,7 @@ _KNOWN = {"method", "slip", "parameters", "offsets", "fits", "correlation_work_o
 def _head(d: Mapping[str, Any], title: str) -> str:
     prov = d.get("provenance") or {}
     slip = d.get("slip") or {}
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     names = {"work_of_adhesion": "W_ad", "mu_h": "μh"}
     lines = [f"{names.get(k, k)} = <b>{e(estimate_text(k, v))}</b>"
              + f" <span class=\"status-{e(v.get('status'))}\">({e(str(v.get('status')).replace('_', ' '))})</span>"

@@ -4,10 +4,18 @@ Rendered from the report.json dictionary (the same words as report.html, :mod:`.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
-from .series_text import CURVE_HEADER, SLIP_HEADER, curve_legend, curve_rows, slip_rows, width_comparison
+from .series_text import (
+    CURVE_HEADER,
+    SLIP_HEADER,
+    curve_legend,
+    curve_rows,
+    slip_rows,
+    width_comparison,
+)
 from .text import display, estimate_text, interval_text, seed_text
 
 __all__ = ["series_markdown", "write_series_markdown"]

@@ -12,7 +12,7 @@ import numpy as np
 from .plots import _pyplot
 from .series_text import curve_label, scene_text
 
-__all__ = ["plot_series", "write_series_markdown", "series_markdown"]
+__all__ = ["plot_series", "series_markdown", "write_series_markdown"]
 
 from .series_markdown import series_markdown, write_series_markdown  # noqa: E402 - the old import path
 

@@ -5,13 +5,23 @@ the same as a fresh one.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from .text import estimate_text, fmt, interval_text
 
-__all__ = ["curve_label", "scene_text", "curve_rows", "CURVE_HEADER", "FLAG_WORDS", "curve_legend",
-           "slip_rows", "SLIP_HEADER", "width_comparison"]
+__all__ = [
+    "CURVE_HEADER",
+    "FLAG_WORDS",
+    "SLIP_HEADER",
+    "curve_label",
+    "curve_legend",
+    "curve_rows",
+    "scene_text",
+    "slip_rows",
+    "width_comparison",
+]
 
 FLAG_WORDS = {"redchi": "misfit: the shared values do not follow it",
               "redchi_contact_radius": "contact radius misfit",
