@@ -187,3 +187,19 @@ def test_start_covariance_scale_is_corrected_against_the_posterior():
     fixed, ratio = checked_covariance(target, np.zeros(4), bad)
     assert ratio[0] == ratio[1] == ratio[3] == 1.0
     assert np.allclose(np.sqrt(np.diag(fixed)), np.sqrt(np.diag(cov)), rtol=0.15), (np.diag(fixed), np.diag(cov))
+
+
+def test_a_rejected_condition_need_not_converge_only_when_negligible():
+    """The convergence rule of a series: a condition the least-squares fit rejects (ΔBIC > 100) may stay
+    unconverged only while its probability, raised by 20 Monte-Carlo standard errors, stays < 1e-6."""
+    from adhfit.fitting.global_mcmc import _converged, _rejected
+    assert _rejected({"no-slip": -1000.0, "frictionless": -850.0}) == {"frictionless"}
+    assert _rejected({"no-slip": -1000.0, "frictionless": -950.0}) == set()
+    diags = {"no-slip": {"converged": True}, "frictionless": {"converged": False}}
+    tiny = {"probabilities": {"no-slip": 1.0, "frictionless": 1e-40}, "log_bayes_factor_stderr": 0.5}
+    assert _converged(diags, tiny, {"frictionless"})
+    assert not _converged(diags, tiny, set())  # not rejected by least squares: it must converge
+    close = {"probabilities": {"no-slip": 1.0 - 1e-7, "frictionless": 1e-7}, "log_bayes_factor_stderr": 0.5}
+    assert not _converged(diags, close, {"frictionless"})  # e^10 x 1e-7 > 1e-6
+    assert not _converged({"no-slip": {"converged": False}, "frictionless": {"converged": True}}, tiny,
+                          {"frictionless"})
