@@ -8,7 +8,7 @@ right slip is selected / the wrong one selected / undecided, the median relative
 and for comparison the best single-curve W_ad interval width of the same curves.
 
 Usage: python benchmarks/recovery_series.py N [--noise 0.01,0.02] [--slips no-slip,frictionless]
-           [--profile] [--workers 2] [-o benchmarks/results/recovery_series.md]
+           [--profile] [--workers 2] [--distinct-seeds] [-o benchmarks/results/recovery_series.md]
 
 Replicates run in order (replicate 0 of every cell, then replicate 1, ...), so a partial run (the
 table is rewritten after every series) is balanced over the cells.
@@ -130,6 +130,7 @@ def main(argv=None) -> int:
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--seed0", type=int, default=13_000)
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--distinct-seeds", action="store_true", help="seeds seed0 + 1000·cell + i (independent cells)")
     ap.add_argument("-o", "--output", type=Path, default=None)
     ap.add_argument("--from-json", type=Path, default=None, help="re-render the tables of a finished run")
     args = ap.parse_args(argv)
@@ -138,8 +139,11 @@ def main(argv=None) -> int:
         print(table(rows) + "\n\n" + pooled(rows))
         return 0
     rows = []
-    plan = [(slip, noise, args.seed0 + i, args.profile) for i in range(args.n)
-            for slip in args.slips.split(",") for noise in map(float, args.noise.split(","))]
+    # every (slip, noise) cell its own seeds: with one seed list the cells share their noise draws
+    # (scaled), and a replicate that misleads one cell misleads all four
+    cells = [(slip, noise) for slip in args.slips.split(",") for noise in map(float, args.noise.split(","))]
+    plan = [(slip, noise, args.seed0 + i + (1000 * c if args.distinct_seeds else 0), args.profile)
+            for i in range(args.n) for c, (slip, noise) in enumerate(cells)]
     pool = ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("fork")) \
         if args.workers > 1 else None
     results = pool.map(_one, plan) if pool is not None else map(_one, plan)
