@@ -8,7 +8,8 @@ right slip is selected / the wrong one selected / undecided, the median relative
 and for comparison the best single-curve W_ad interval width of the same curves.
 
 Usage: python benchmarks/recovery_series.py N [--noise 0.01,0.02] [--slips no-slip,frictionless]
-           [--profile] [--workers 2] [--distinct-seeds] [-o benchmarks/results/recovery_series.md]
+           [--profile] [--workers 2] [--distinct-seeds] [--drop-fold-rows K]
+           [-o benchmarks/results/recovery_series.md]
 
 Replicates run in order (replicate 0 of every cell, then replicate 1, ...), so a partial run (the
 table is rewritten after every series) is balanced over the cells.
@@ -16,6 +17,7 @@ table is rewritten after every series) is balanced over the cells.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import multiprocessing
 import subprocess
@@ -35,16 +37,28 @@ TRUE = {"work_of_adhesion": 0.4, "mu_h": 2.0}
 PRESSURES = (800.0, 1200.0, 1600.0)
 
 
-def one(slip: str, noise: float, seed: int, profile: bool) -> list[dict]:
+def _drop_fold_rows(curve, i_jump: int, k: int):
+    """The curve without its last ``k`` attached rows before pull-off (the rows next to the fold)."""
+    keep = np.ones(len(curve.x), bool)
+    keep[max(i_jump - k, curve.i_turn + 1):i_jump] = False
+    cols = {n: np.asarray(getattr(curve, n))[keep] for n in ("x", "force", "line")}
+    if curve.contact_radius is not None:
+        cols["contact_radius"] = np.asarray(curve.contact_radius)[keep]
+    return dataclasses.replace(curve, **cols)
+
+
+def one(slip: str, noise: float, seed: int, profile: bool, drop_fold_rows: int = 0) -> list[dict]:
     scene = load_scene(SCENE)
     series = synthetic_series(scene, slip, pressures=PRESSURES, **TRUE, x_max=6e-4, noise=noise,
                               radius_noise=0.01, rng=np.random.default_rng(seed))
     curves, scenes = [c for c, _, _ in series], [s for _, s, _ in series]
+    if drop_fold_rows:
+        curves = [_drop_fold_rows(c, t["i_jump"], drop_fold_rows) for c, _, t in series]
     out = []
     for radius in (True, False):
         t0 = time.perf_counter()
         r = fit_global(curves, scenes, contact_radius=radius, profile=profile)
-        rec = {"slip": slip, "noise": noise, "seed": seed, "radius": radius, "selected": r.slip["selected"],
+        rec = {"slip": slip, "noise": noise, "seed": seed, "radius": radius, "drop_fold_rows": drop_fold_rows, "selected": r.slip["selected"],
                "delta_bic": r.slip["delta_bic"], "favoured": r.slip["favoured"], "seconds": time.perf_counter() - t0}
         for name, true in TRUE.items():
             e = r.parameters[name]
@@ -131,6 +145,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed0", type=int, default=13_000)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--distinct-seeds", action="store_true", help="seeds seed0 + 1000·cell + i (independent cells)")
+    ap.add_argument("--drop-fold-rows", type=int, default=0,
+                    help="leave out each curve's last K attached rows before pull-off (the fold experiment)")
     ap.add_argument("-o", "--output", type=Path, default=None)
     ap.add_argument("--from-json", type=Path, default=None, help="re-render the tables of a finished run")
     args = ap.parse_args(argv)
@@ -142,7 +158,7 @@ def main(argv=None) -> int:
     # every (slip, noise) cell its own seeds: with one seed list the cells share their noise draws
     # (scaled), and a replicate that misleads one cell misleads all four
     cells = [(slip, noise) for slip in args.slips.split(",") for noise in map(float, args.noise.split(","))]
-    plan = [(slip, noise, args.seed0 + i + (1000 * c if args.distinct_seeds else 0), args.profile)
+    plan = [(slip, noise, args.seed0 + i + (1000 * c if args.distinct_seeds else 0), args.profile, args.drop_fold_rows)
             for i in range(args.n) for c, (slip, noise) in enumerate(cells)]
     pool = ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("fork")) \
         if args.workers > 1 else None
