@@ -208,9 +208,9 @@ def fit_global_mcmc(curves, scenes, *, slip: str = "auto", sigma: float | None =
     from .global_fit import joint_stage  # noqa: PLC0415
     from .series_checks import assemble  # noqa: PLC0415
     t0 = time.perf_counter()
-    unknown = sorted(set(settings) - set(DEFAULTS))
-    if unknown:
-        raise InputError(unknown[0], settings[unknown[0]], "one of " + ", ".join(DEFAULTS))
+    if set(settings) - set(DEFAULTS):
+        bad = sorted(set(settings) - set(DEFAULTS))[0]
+        raise InputError(bad, settings[bad], "one of " + ", ".join(DEFAULTS))
     cfg = DEFAULTS | settings
     seed = int(np.random.SeedSequence().entropy % 2**63) if seed is None else int(seed)
     stage = joint_stage(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_contact_radius,
@@ -220,11 +220,7 @@ def fit_global_mcmc(curves, scenes, *, slip: str = "auto", sigma: float | None =
     lsq_verdict = compare({s: f.bic for s, f in stage.fits.items()}, {s: f.aic for s, f in stage.fits.items()})
     names, priors = series_priors(stage.joint, stage.scenes)
     targets = {s: SeriesTarget(sf, names, priors) for s, sf in stage.joint.items()}
-    path = None
-    if outdir is not None:
-        from pathlib import Path  # noqa: PLC0415
-        path = Path(outdir) / "chain.h5"
-        path.parent.mkdir(parents=True, exist_ok=True)
+    path = _chain_path(outdir)
     root = np.random.SeedSequence(seed)
     run_seed, rest = root.spawn(2)
     n_workers = default_workers() if workers is None else int(workers)
@@ -234,10 +230,7 @@ def fit_global_mcmc(curves, scenes, *, slip: str = "auto", sigma: float | None =
         n_evals = pmap.n_evaluations
     probs = model_probabilities(evid)
     verdict = _verdict(probs, lsq_verdict)
-    fits = {s: dataclasses.replace(f, parameters={k: e for k, e in _estimates(samples[s], names, f.parameters,
-                                                                             priors).items() if k in SHARED},
-                                   diagnostics=tuple(f.diagnostics) + tuple(diags[s]["warnings"]))
-            for s, f in stage.fits.items()}
+    fits = _posterior_fits(stage, samples, names, priors, diags)
     rep = verdict["parameters_from"]
     reported = _reported(samples, probs, verdict, fits, targets, np.random.default_rng(rest))
     lsq_result = assemble(stage.curves, stage.scenes, stage.joint, stage.fits, dict(stage.verdict, parameters_from=rep),
@@ -245,12 +238,30 @@ def fit_global_mcmc(curves, scenes, *, slip: str = "auto", sigma: float | None =
     converged = _converged(diags, probs, rejected)
     summary = _summary(targets, chains, diags, evid, probs, cfg, seed, n_workers, stage, path, t_lsq, n_evals,
                        converged)
-    prov = dict(lsq_result.provenance, method="mcmc", options=dict(stage.options, **cfg, profile=None))
     base = {f.name: getattr(lsq_result, f.name) for f in dataclasses.fields(lsq_result)}
-    base.update(method="mcmc", slip=verdict, parameters=reported, fits=fits, provenance=prov,
+    base.update(method="mcmc", slip=verdict, parameters=reported, fits=fits,
+                provenance=dict(lsq_result.provenance, method="mcmc", options=dict(stage.options, **cfg, profile=None)),
                 curves=tuple(_offset_entries(lsq_result.curves, targets[rep], samples[rep])),
                 warnings=tuple(_warnings(lsq_result, reported, verdict, diags, probs, fits, converged)),
                 n_evaluations=lsq_result.n_evaluations + n_evals, wall_time=time.perf_counter() - t0,
                 raw=dict(lsq_result.raw, chains=chains),
                 sigma_source=lsq_result.sigma_source + "; in the posterior: " + targets[rep].noise_model)
     return McmcFitResult(**base, mcmc=summary, samples=samples, predictive={})
+
+
+def _chain_path(outdir):
+    """``OUTDIR/chain.h5`` (its folder made), or None."""
+    if outdir is None:
+        return None
+    from pathlib import Path  # noqa: PLC0415
+    path = Path(outdir) / "chain.h5"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def _posterior_fits(stage, samples, names, priors, diags) -> dict:
+    """Each condition's least-squares :class:`SlipFit` with the posterior estimates of W_ad and μh."""
+    return {s: dataclasses.replace(f, parameters={k: e for k, e in _estimates(samples[s], names, f.parameters,
+                                                                             priors).items() if k in SHARED},
+                                   diagnostics=tuple(f.diagnostics) + tuple(diags[s]["warnings"]))
+            for s, f in stage.fits.items()}
