@@ -1,9 +1,10 @@
 """``adhfit fit FILE ... --global`` (docs/contracts.md A7): one fit of a test series.
 
 Thin: find the curves and each one's scene (``--scene``, else the nearest ``scene.toml``, as in a
-batch), call :func:`adhfit.fitting.global_fit.fit_global`, write the reports with
-:func:`adhfit.report.write` (``report.json`` with ``curves``, ``report.md``, ``fit.png``: every curve with
-the shared fit and its residuals), print a short summary.
+batch), call :func:`adhfit.fit` on them (``--method lsq`` or ``mcmc``), write the reports with
+:func:`adhfit.report.write` (``report.json`` with ``curves``, ``report.md``, ``report.html`` and
+``fit.png``: every curve with the shared fit and its residuals; MCMC: also ``chain.h5``), print a
+short summary.
 """
 from __future__ import annotations
 
@@ -31,14 +32,12 @@ def _jobs(args):
 def run_global(args) -> int:
     """Run ``adhfit fit ... --global`` from parsed arguments; returns the exit status."""
     from ..data import read_curve  # noqa: PLC0415
+    from ..fitting.api import fit  # noqa: PLC0415
     from ..report import write  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from ..fitting.global_fit import fit_global  # noqa: PLC0415
     from .arguments import fit_x_offset, read_options  # noqa: PLC0415
     from .writing import check_output_dir  # noqa: PLC0415
-    if args.method != "lsq":
-        raise InputError("--method", args.method, "lsq (a global MCMC fit is not available in this version)")
     out = check_output_dir(args.output if args.output is not None else Path("adhfit_global_fit"))
     jobs = _jobs(args)
     scenes = [load_scene(j.scene) for j in jobs]
@@ -50,19 +49,26 @@ def run_global(args) -> int:
     fit_x = fit_x_offset(args, scenes[0].control) if len(controls) == 1 else None
     slips = {sc.slip for sc in scenes}
     slip = args.slip or (slips.pop() if len(slips) == 1 else "auto")
-    result = fit_global(curves, scenes, slip=slip, sigma=sigma, sigma_contact_radius=sigma_a,
-                        contact_radius=not getattr(args, "no_contact_radius", False), fit_x_offset=fit_x,
-                        fit_force_offset=True, seed=args.seed, points=args.points, profile=not args.no_profile)
+    mcmc = {"outdir": out, "progress": False if getattr(args, "quiet", False) else None}
+    result = fit(curves, scenes, method=args.method, slip=slip, sigma=sigma, sigma_contact_radius=sigma_a,
+                 contact_radius=not getattr(args, "no_contact_radius", False), fit_x_offset=fit_x,
+                 fit_force_offset=True, seed=args.seed, points=args.points, profile=not args.no_profile,
+                 mcmc=mcmc if args.method == "mcmc" else None)
     write(result, out, plot=not args.no_plot)
     print(_summary(result, out))
     return 0
 
 
 def _summary(result, out: Path) -> str:
-    lines = [f"global fit of {len(result.curves)} curves; slip: {result.slip['verdict']}"]
-    for e in result.parameters.values():
-        ci = "" if e.ci95 is None else f"  95 % [{e.ci95[0]}, {e.ci95[1]}]"
-        lines.append(f"{e.name} = {e.value:.5g} {e.unit} ({e.status}){ci}")
+    from .writing import estimate_line  # noqa: PLC0415
+    lines = [f"global {result.method} fit of {len(result.curves)} curves; slip: {result.slip['verdict']}"]
+    if result.method == "mcmc":
+        probs = ", ".join(f"P({k}) = {v:.3g}" for k, v in result.mcmc["model_probabilities"]["probabilities"].items())
+        lines.append(f"MCMC {'converged' if result.converged else 'NOT CONVERGED (see report.html)'}; {probs}; "
+                     f"seed {result.mcmc['seed']}; chains in chain.h5")
+    for name, e in result.parameters.items():
+        lines.append(estimate_line(name, e))
     lines.append(f"observables: {', '.join(result.observables)}; {len(result.warnings)} warning(s); "
-                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, fit.png")
+                 f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, report.html"
+                 + (", fit.png" if (out / "fit.png").exists() else ""))
     return "\n".join(lines)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["check_output_dir", "summary_text"]
+__all__ = ["check_output_dir", "summary_text", "estimate_line"]
 
 
 def check_output_dir(path: Path) -> Path:
@@ -31,7 +31,7 @@ def check_output_dir(path: Path) -> Path:
     return path
 
 
-def _fmt_estimate(name: str, e) -> str:
+def estimate_line(name: str, e) -> str:
     """One line per estimate, honest about one-sided and undetermined parameters."""
     d = e if isinstance(e, dict) else e.as_dict()
     from ..report.text import estimate_text  # noqa: PLC0415
@@ -46,7 +46,7 @@ def summary_text(result, out: Path) -> str:
         lines.append(f"membrane: {d['model']['membrane']} ({d['model']['why']})")
     shown = dict(d.get("parameters", {}))
     for name, e in shown.items():
-        lines.append(_fmt_estimate(name, e))
+        lines.append(estimate_line(name, e))
     n_warn = len(d.get("warnings", []) or [])
     lines.append(f"{n_warn} warning(s); {d.get('model_evaluations')} model evaluations, "
                  f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, report.html"

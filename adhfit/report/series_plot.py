@@ -1,4 +1,4 @@
-"""fit.png and report.md of a global fit (issue 13): every curve with the shared fit and its residuals.
+"""fit.png of a global fit (issue 13): every curve with the shared fit and its residuals.
 
 Draws from the stored predictions of a :class:`~adhfit.fitting.result.FitResult` with ``curves``
 (``raw["series_plot"]``); never re-runs a fit.
@@ -10,12 +10,26 @@ from pathlib import Path
 import numpy as np
 
 from .plots import _pyplot
+from .series_text import curve_label, scene_text
 
-__all__ = ["plot_series", "write_series_markdown", "series_markdown"]
+__all__ = ["plot_series", "series_markdown", "write_series_markdown"]
+
+from .series_markdown import series_markdown, write_series_markdown  # noqa: E402 - the old import path
 
 
 def _kx(control: str) -> tuple[float, str]:
     return (1e6, "displacement (µm, measured)") if control == "displacement" else (1e-3, "pressure (kPa)")
+
+
+def _short(e) -> str:
+    """``= 0.4012 [0.398, 0.404]``, ``≥ 0.35`` or ``not determined`` for the figure's title."""
+    if e.status == "determined" and e.ci95:
+        return f"= {e.value:.4g} [{e.ci95[0]:.4g}, {e.ci95[1]:.4g}]"
+    if e.status == "lower_bound" and e.ci95:
+        return f"≥ {e.ci95[0]:.4g}"
+    if e.status == "upper_bound" and e.ci95:
+        return f"≤ {e.ci95[1]:.4g}"
+    return "not determined"
 
 
 def plot_series(result, *, path: str | Path | None = None):
@@ -31,66 +45,35 @@ def plot_series(result, *, path: str | Path | None = None):
                              gridspec_kw={"height_ratios": [3, 1.4] + ([2] if radius else [])})
     kx, xlabel = _kx(data[0]["control"])
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, d in enumerate(data):
-        c = colors[k % len(colors)]
+    curves = list(result.curves) or [{}] * len(data)
+    for k, (d, c) in enumerate(zip(data, curves)):
+        col = colors[k % len(colors)]
         x = np.asarray(d["x"]) * kx
-        axes[0].plot(x, np.asarray(d["force"]) * 1e3, ".", ms=2.5, color=c, label=f"{d['label']}")
-        axes[0].plot(x, np.asarray(d["predicted"]) * 1e3, "-", lw=0.9, color=c)
-        axes[1].plot(x, (np.asarray(d["force"]) - np.asarray(d["predicted"])) / d["sigma_force"], ".", ms=2.5, color=c)
+        name = f"{k + 1}: {curve_label(c.get('file', d['label']))}" + (f" ({scene_text(c)})" if c else "")
+        axes[0].plot(x, np.asarray(d["force"]) * 1e3, ".", ms=2.5, color=col, alpha=0.6, label=name)
+        axes[0].plot(x, np.asarray(d["predicted"]) * 1e3, "-", lw=1.1, color=col)
+        axes[1].plot(x, (np.asarray(d["force"]) - np.asarray(d["predicted"])) / d["sigma_force"], ".", ms=2.5,
+                     color=col, alpha=0.7)
         if "a" in d:
             rows = np.asarray(d["a_rows"])
-            axes[2].plot(x[rows], np.asarray(d["a"]) * 1e6, ".", ms=2.5, color=c)
-            axes[2].plot(x, np.asarray(d["a_predicted"]) * 1e6, "-", lw=0.9, color=c)
+            axes[2].plot(x[rows], np.asarray(d["a"]) * 1e6, ".", ms=2.5, color=col, alpha=0.6)
+            axes[2].plot(x, np.asarray(d["a_predicted"]) * 1e6, "-", lw=1.1, color=col)
     p = result.parameters
     w, mu = p["work_of_adhesion"], p["mu_h"]
-    axes[0].set_title(f"shared fit: W_ad = {w.value:.4g} J/m², μh = {mu.value:.4g} N/m; "
-                      f"{result.slip['verdict']}", fontsize=9)
+    axes[0].set_title(f"shared fit ({result.method}): W_ad {_short(w)} J/m², μh {_short(mu)} N/m\n"
+                      f"slip: {result.slip['verdict']}", fontsize=9)
     axes[0].set_ylabel("force (mN)")
     axes[0].axhline(0.0, color="0.6", lw=0.6)
     axes[0].legend(fontsize=7)
     axes[1].axhline(0.0, color="0.6", lw=0.6)
-    axes[1].set_ylabel("residual / σ_i")
+    axes[1].set_ylabel("residual / σ of its curve", fontsize=8)
+    for y in (-3.0, 3.0):
+        axes[1].axhline(y, color="0.8", lw=0.5, ls="--")
     if radius:
         axes[2].set_ylabel("contact radius (µm)")
+        axes[2].set_title("contact radius: dots measured, lines the shared fit", fontsize=8)
     axes[-1].set_xlabel(xlabel)
     if path is not None:
         fig.savefig(path, dpi=130)
         plt.close(fig)
     return fig
-
-
-def _fmt(v, spec=".4g") -> str:
-    return "—" if v is None else format(v, spec)
-
-
-def series_markdown(result) -> str:
-    """report.md of a global fit."""
-    d = result.as_dict()
-    lines = ["# adhfit global fit", "", f"Curves: {len(d['curves'])}; observables: {', '.join(d['observables'])}.",
-             "", f"**Slip:** {d['slip']['verdict']}", "", "| parameter | value | 95 % | status | unit |",
-             "|---|---|---|---|---|"]
-    for name, e in d["parameters"].items():
-        ci = "—" if e["ci95"] is None else f"[{_fmt(e['ci95'][0])}, {_fmt(e['ci95'][1])}]"
-        lines.append(f"| {name} | {_fmt(e['value'])} | {ci} | {e['status']} | {e['unit']} |")
-    lines += ["", "## Curves", "",
-              "| file | rows | reduced χ² | W_ad alone | μh alone | pull on W_ad, μh (σ) | p | flags |",
-              "|---|---|---|---|---|---|---|---|"]
-    for c in d["curves"]:
-        lo = c["leave_one_out"]
-        s = lo["shift_in_stderr"]
-        alone = c["alone"]
-        lines.append(f"| {c['file']} | {c['n_points']} | {_fmt(c['redchi'], '.3g')} | "
-                     f"{_fmt(alone['work_of_adhesion']['value'])} | {_fmt(alone['mu_h']['value'])} | "
-                     f"{_fmt(s['work_of_adhesion'], '+.2g')}, {_fmt(s['mu_h'], '+.2g')} | {_fmt(lo['p_value'], '.2g')} | "
-                     f"{', '.join(c['flags']) or '—'} |")
-    lines += ["", "Pull: the shift of the shared value when the curve is left out, in joint standard errors; "
-              "p: the chance of a pull this large if the curve agrees with the others (χ², 2 degrees of freedom).", ""]
-    if d["warnings"]:
-        lines += ["## Warnings", ""] + [f"- {w}" for w in d["warnings"]] + [""]
-    return "\n".join(lines)
-
-
-def write_series_markdown(result, path: str | Path) -> Path:
-    path = Path(path)
-    path.write_text(series_markdown(result), encoding="utf-8")
-    return path

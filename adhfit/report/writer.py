@@ -3,8 +3,8 @@
 One curve: ``report.json`` (docs/contracts.md A5/A5b), ``report.md``, ``report.html`` (one
 self-contained page), ``plot_data.json`` (the data and the fitted curve, for a batch's summary page)
 and ``fit.png``; an MCMC fit adds ``fit_mcmc.png`` (posterior-predictive band) and ``corner.png``.
-A test series (a result with ``curves``): ``report.json`` with ``curves``, ``report.md`` and
-``fit.png`` (every curve with the shared fit).
+A test series (a result with ``curves``): ``report.json`` with ``curves``, ``report.md``,
+``report.html`` and ``fit.png`` (every curve with the shared fit).
 """
 from __future__ import annotations
 
@@ -68,13 +68,27 @@ def _figures(result: Any, out: Path, drawn: tuple[str, ...]) -> dict[str, Path]:
     return figures
 
 
+#: the caption of a series' figure in its report.html
+_SERIES_CAPTION = ("Every curve (dots) with the shared fit (lines); below, each curve's residuals in units of its own "
+                   "noise σ (dashed: ±3), and the contact radius when it was fitted")
+
+
 def _write_series(result: Any, out: Path, plot: bool) -> list[Path]:
+    """report.json (with ``curves``), then report.md and report.html from exactly what report.json says,
+    and fit.png (every curve with the shared fit) embedded in the page."""
+    import json  # noqa: PLC0415
     from .json_report import write_json  # noqa: PLC0415
-    from .series_plot import plot_series, write_series_markdown  # noqa: PLC0415
-    written = [out / "report.json", out / "report.md"]
+    from .series_html import write_series_html  # noqa: PLC0415
+    from .series_markdown import write_series_markdown  # noqa: PLC0415
+    written = [out / "report.json", out / "report.md", out / "report.html"]
     write_json(result, written[0])
-    write_series_markdown(result, written[1])
+    d = json.loads(written[0].read_text(encoding="utf-8"))
+    write_series_markdown(d, written[1])
+    images = {}
     if plot:
+        from .series_plot import plot_series  # noqa: PLC0415
         plot_series(result, path=out / "fit.png")
+        images = {_SERIES_CAPTION: out / "fit.png"}
         written.append(out / "fit.png")
+    write_series_html(d, written[2], images=images)
     return written
