@@ -77,9 +77,11 @@ def _env(tree: Path) -> dict:
     return os.environ | {"PYTHONPATH": str(tree), "MPLBACKEND": "Agg"}
 
 
-def _wall(cmd: list[str], tree: Path, cwd: Path) -> float:
+def _wall(cmd: list[str], tree: Path) -> float:
+    """Wall seconds of ``cmd`` run from ``tree`` (``python -m`` puts the working folder first on
+    sys.path: run elsewhere, it would import that folder's adhfit, whatever PYTHONPATH says)."""
     t = time.perf_counter()
-    run = subprocess.run(cmd, env=_env(tree), cwd=cwd, capture_output=True, text=True)
+    run = subprocess.run(cmd, env=_env(tree), cwd=tree, capture_output=True, text=True)
     wall = time.perf_counter() - t
     if run.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed in {tree}: {run.stderr[-500:]}")
@@ -101,7 +103,7 @@ def _curve300(work: Path) -> Path:
     subprocess.run([sys.executable, "-m", "adhfit.cli", "simulate", "--scene", str(SAMPLE / "scene.toml"),
                     "--slip", "no-slip", "--mu-h", "2 N/m", "--work-of-adhesion", "0.4 J/m^2",
                     "--a-max", "0.3", "--noise", "0.01", "--seed", "7", "--points", "300", "-o", str(path)],
-                   env=_env(ROOT), check=True, capture_output=True)
+                   env=_env(ROOT), cwd=ROOT, check=True, capture_output=True)
     return path
 
 
@@ -110,7 +112,7 @@ def measure(trees: dict[str, Path], repeat: int, work: Path) -> dict[str, dict[s
     c300 = _curve300(work)
     res: dict[str, dict[str, list[float]]] = {name: {} for name in trees}
     for name, tree in trees.items():  # warm each tree's numba cache (not timed)
-        _wall(_commands(work / name)["cli_fit_s"], tree, ROOT)
+        _wall(_commands(work / name)["cli_fit_s"], tree)
     for _ in range(max(1, repeat // 3)):
         for name, tree in trees.items():
             run = subprocess.run([sys.executable, "-c", _INPROCESS, str(SAMPLE), str(c300), "3"], env=_env(tree),
@@ -121,7 +123,7 @@ def measure(trees: dict[str, Path], repeat: int, work: Path) -> dict[str, dict[s
         n = repeat if key != "cli_mcmc_s" else max(3, repeat // 2)
         for _ in range(n):
             for name, tree in trees.items():
-                res[name].setdefault(key, []).append(_wall(_commands(work / name)[key], tree, ROOT))
+                res[name].setdefault(key, []).append(_wall(_commands(work / name)[key], tree))
     return {name: {k: statistics.median(v) for k, v in d.items()} for name, d in res.items()}
 
 
