@@ -12,7 +12,7 @@ from scipy import special
 
 from ..errors import InputError
 from .lsq import PENALTY
-from .posterior import Prior, default_priors
+from .posterior import LogPosterior, Prior, default_priors
 from .series import Values, block_sizes, series_residual
 
 __all__ = ["SCALE_CHECK", "SHARED", "SeriesTarget", "checked_covariance", "series_priors"]
@@ -20,7 +20,7 @@ __all__ = ["SCALE_CHECK", "SHARED", "SeriesTarget", "checked_covariance", "serie
 SHARED = ("work_of_adhesion", "mu_h")
 
 
-class SeriesTarget:
+class SeriesTarget(LogPosterior):
     """Log prior, log likelihood and log posterior of one slip condition's joint fit, in θ.
 
     The same interface as :class:`.posterior.Target` (``names``, ``ndim``, ``priors``, ``log_prior``,
@@ -51,10 +51,6 @@ class SeriesTarget:
             k += nf + na
 
     @property
-    def ndim(self) -> int:
-        return len(self.names)
-
-    @property
     def noise_model(self) -> str:
         known = [k for k, v in self.given.items() if v]
         head = "Gaussian, one sigma per curve and observable"
@@ -62,14 +58,6 @@ class SeriesTarget:
             return head + ", all given"
         tail = "integrated out analytically under p(sigma) ∝ 1/sigma (block by block)"
         return head + (f"; {', '.join(known)} given, the others " if known else "; ") + tail
-
-    def log_prior(self, theta: np.ndarray) -> float:
-        total = 0.0
-        for prior, t in zip(self.priors, theta):
-            total += prior.logpdf(float(t))
-            if total == -math.inf:
-                break
-        return total
 
     def residual(self, theta: np.ndarray) -> np.ndarray:
         """The joint least-squares residual at θ (each block in units of its σ)."""
@@ -87,22 +75,6 @@ class SeriesTarget:
             else:
                 total += math.log(0.5) + special.gammaln(0.5 * n) - 0.5 * n * math.log(math.pi * ss * sigma**2)
         return total
-
-    def __call__(self, theta: np.ndarray) -> float:
-        """ln posterior (unnormalised): what emcee samples."""
-        lp = self.log_prior(theta)
-        if lp == -math.inf:
-            return -math.inf
-        ll = self.log_likelihood(theta)
-        return lp + ll if math.isfinite(ll) else -math.inf
-
-    def to_si(self, theta: np.ndarray) -> np.ndarray:
-        """θ samples (..., ndim) -> SI values of ``self.names``."""
-        theta = np.asarray(theta, float)
-        out = np.empty_like(theta)
-        for k, prior in enumerate(self.priors):
-            out[..., k] = np.exp(theta[..., k]) if prior.log else theta[..., k] * prior.factor
-        return out
 
 
 def _scene_priors(scenes) -> dict:

@@ -37,7 +37,7 @@ from .lsq import PENALTY, Parametrisation, residual_function
 from .model import CurveModel
 from .starts import noise_estimate
 
-__all__ = ["Prior", "Target", "default_priors", "DEFAULT_PRIOR_FACTOR", "INTERNAL_NAMES"]
+__all__ = ["LogPosterior", "Prior", "Target", "default_priors", "DEFAULT_PRIOR_FACTOR", "INTERNAL_NAMES"]
 
 #: default log-uniform priors reach this factor below and above the least-squares estimates
 DEFAULT_PRIOR_FACTOR = 100.0
@@ -139,7 +139,47 @@ class _Values(dict):
         return self
 
 
-class Target:
+class LogPosterior:
+    """What a target needs besides its likelihood: ``ndim``, the prior, the posterior emcee samples and
+    the map from θ back to SI values (subclasses set ``names`` and ``priors`` and define
+    ``log_likelihood``)."""
+
+    names: list[str]
+    priors: list[Prior]
+
+    @property
+    def ndim(self) -> int:
+        return len(self.names)
+
+    def log_prior(self, theta: np.ndarray) -> float:
+        total = 0.0
+        for prior, t in zip(self.priors, theta):
+            total += prior.logpdf(float(t))
+            if total == -math.inf:
+                break
+        return total
+
+    def log_likelihood(self, theta: np.ndarray) -> float:  # pragma: no cover - defined by subclasses
+        raise NotImplementedError
+
+    def __call__(self, theta: np.ndarray) -> float:
+        """ln posterior (unnormalised): what emcee samples."""
+        lp = self.log_prior(theta)
+        if lp == -math.inf:
+            return -math.inf
+        ll = self.log_likelihood(theta)
+        return lp + ll if math.isfinite(ll) else -math.inf
+
+    def to_si(self, theta: np.ndarray) -> np.ndarray:
+        """θ samples (..., ndim) -> SI values of ``self.names``."""
+        theta = np.asarray(theta, float)
+        out = np.empty_like(theta)
+        for k, prior in enumerate(self.priors):
+            out[..., k] = np.exp(theta[..., k]) if prior.log else theta[..., k] * prior.factor
+        return out
+
+
+class Target(LogPosterior):
     """Log prior, log likelihood and log posterior of one slip condition in θ.
 
     Parameters
@@ -165,23 +205,11 @@ class Target:
         self.n = model.force.size + (model.jump is not None)
 
     @property
-    def ndim(self) -> int:
-        return len(self.names)
-
-    @property
     def noise_model(self) -> str:
         if self.sigma is not None:
             return f"Gaussian, sigma known ({self.sigma:.4g} N, given)"
         return ("Gaussian, sigma unknown: integrated out analytically under the prior p(sigma) ∝ 1/sigma "
                 "(Student-t-like marginal likelihood)")
-
-    def log_prior(self, theta: np.ndarray) -> float:
-        total = 0.0
-        for prior, t in zip(self.priors, theta):
-            total += prior.logpdf(float(t))
-            if total == -math.inf:
-                break
-        return total
 
     def residual(self, theta: np.ndarray) -> np.ndarray:
         """The shared least-squares residual at θ (units of ``self.scale``)."""
@@ -196,22 +224,6 @@ class Target:
             return -0.5 * ss - 0.5 * self.n * math.log(2.0 * math.pi * self.sigma**2)
         rss = ss * self.scale**2
         return math.log(0.5) + special.gammaln(0.5 * self.n) - 0.5 * self.n * math.log(math.pi * rss)
-
-    def __call__(self, theta: np.ndarray) -> float:
-        """ln posterior (unnormalised): what emcee samples."""
-        lp = self.log_prior(theta)
-        if lp == -math.inf:
-            return -math.inf
-        ll = self.log_likelihood(theta)
-        return lp + ll if math.isfinite(ll) else -math.inf
-
-    def to_si(self, theta: np.ndarray) -> np.ndarray:
-        """θ samples (..., ndim) -> SI values of ``self.names``."""
-        theta = np.asarray(theta, float)
-        out = np.empty_like(theta)
-        for k, prior in enumerate(self.priors):
-            out[..., k] = np.exp(theta[..., k]) if prior.log else theta[..., k] * prior.factor
-        return out
 
     def from_si(self, values: dict) -> np.ndarray:
         """SI dict (as :meth:`Parametrisation.si` gives) -> θ."""
