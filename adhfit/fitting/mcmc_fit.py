@@ -184,10 +184,12 @@ def _run_jobs(jobs: list, processes: int) -> list[dict]:
     _JOBS[:] = jobs
     import threading  # noqa: PLC0415
     from .diagnostics import preload  # noqa: PLC0415
-    # the parent only waits while the jobs run: it loads the diagnostics' library (arviz, 1-3 s) meanwhile
-    threading.Thread(target=preload, daemon=True).start()
     try:
         with multiprocessing.get_context("fork").Pool(processes) as pool:
+            # the parent only waits while the jobs run: it loads the diagnostics' library (arviz, 1-3 s)
+            # meanwhile, in a thread started after the workers were forked (a fork while a thread
+            # imports would copy its import locks, and a worker could wait on them for ever)
+            threading.Thread(target=preload, daemon=True).start()
             return pool.map(_run_job, range(len(jobs)), chunksize=1)
     finally:
         _JOBS.clear()
