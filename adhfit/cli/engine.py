@@ -64,11 +64,15 @@ def warm_up(control: str = "displacement") -> float:
     t0 = time.perf_counter()
     fixed = {"p": 0.6} if control == "displacement" else {"d": 0.0}
     import numpy as np  # noqa: PLC0415
-    from ..core import pieces  # noqa: PLC0415 - a fit's interpolation kernels
-    nodes = np.linspace(0.0, 1.0, 8)
-    pieces.loading_values(*pieces.loading_nodes(nodes, nodes, 8), nodes)
+    from ..fitting.model import pieces_from_columns  # noqa: PLC0415
+    from ..loading import history  # noqa: PLC0415
     for slip in ("no-slip", "frictionless"):
         simulate(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
+        # a fit's interpolation kernels (force and contact radius, loading and retraction pieces)
+        h = history(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
+        pcs = pieces_from_columns(h.columns, control, h.counts)
+        x = np.linspace(pcs.x_tp, pcs.x_max, 5)
+        pcs.f_loading(x), pcs.f_unloading(x), pcs.a_loading(x), pcs.a_unloading(x)
         # every fit weighs the exact membrane's effect at its optimum (its kernels compile once too),
         # with the loading end given as the fits give it (delta_max or p_max: kernels of their own)
         exact_history(control, slip, **fixed, w=0.2, rs=0.5, lambda0=2.0, a_max=0.25, points=20)
