@@ -42,7 +42,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import AdhfitError, InputError
-from ..loading import COLUMNS, history
+from ..loading import history
 from .options import DEFAULT_POINTS
 from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
@@ -88,7 +88,7 @@ class Pieces:
     retraction : tuple
         Nodes, values, slopes and piece starts of f(u) on pinning and delamination.
     columns : dict of str -> ndarray
-        The history itself (:attr:`adhfit.loading.History.columns`); :attr:`frame` is it as a table.
+        The history itself (:attr:`adhfit.loading.History.columns`).
     counts : tuple of int
         Rows of making contact, pinning and delamination in ``columns``.
     key : str
@@ -105,12 +105,6 @@ class Pieces:
     columns: dict
     counts: tuple
     key: str
-
-    @cached_property
-    def frame(self):
-        """The history as a pandas DataFrame (docs/contracts.md A2 columns; for plots and reports)."""
-        import pandas as pd  # noqa: PLC0415 - only reports need the table
-        return pd.DataFrame({k: self.columns[k] for k in COLUMNS})
 
     @cached_property
     def _radius(self) -> tuple:
