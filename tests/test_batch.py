@@ -112,8 +112,13 @@ def test_folder_with_a_corrupt_file_fits_in_one_command(folder, tmp_path, capsys
     assert float(good["work_of_adhesion_ci95_low"]) < float(good["work_of_adhesion"]) < float(
         good["work_of_adhesion_ci95_high"])
     assert good["method"] == "lsq" and good["adhfit_version"] and len(good["sha256"]) == 64
-    for name in ("report.json", "report.md", "report.html", "fit.png"):
+    for name in ("report.json", "report.md", "report.html", "fit.png", "thumbnail.png"):
         assert (out / "good" / "curve" / name).is_file(), name
+    assert not (out / "corrupt" / "curve" / "thumbnail.png").exists()  # a failed curve draws nothing
+    page = (out / "summary.html").read_text(encoding="utf-8")
+    # the small figure the job drew is the one on the summary page
+    import base64
+    assert base64.b64encode((out / "good" / "curve" / "thumbnail.png").read_bytes()).decode("ascii") in page
     assert "1 of 2 curves failed" in captured.err and "Traceback" not in captured.err
 
 

@@ -178,8 +178,25 @@ def test_summary_page_links_every_curve_and_draws_them(tmp_path):
     assert 'href="c0/report.html"' in page and 'href="c1/report.html"' in page
     assert "0.41 ± 0.0041" in text and "[0.4, 0.42]" in text and "≥" not in text.split("W_ad 95 %")[1][:40]
     assert "failed:" in text and "no force column" in text and "bad&lt;b&gt;" in page
-    assert page.count("data:image/png;base64,") == 2  # values across curves, small multiples
+    # values across curves, and one small figure per fitted curve (drawn from plot_data.json here)
+    assert page.count("data:image/png;base64,") == 3
+    assert "no fit" in text  # the failed curve's place in the grid
     assert "J/m²" in text and "N/m" in text and "adhfit batch: 3 curves" in text
+
+
+def test_summary_page_embeds_the_small_figure_its_job_drew(tmp_path):
+    """A curve whose batch job drew thumbnail.png is shown with exactly those bytes (not drawn again); a
+    folder without one is drawn from its plot_data.json."""
+    import base64
+
+    from adhfit.report.thumbnails import THUMBNAIL, write_thumbnail
+    rows = _batch(tmp_path)
+    drawn = write_thumbnail(rows[0]["report_dir"])
+    assert drawn is not None and drawn.name == THUMBNAIL and drawn.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    page = render_summary_html(rows, tmp_path)
+    assert base64.b64encode(drawn.read_bytes()).decode("ascii") in page
+    assert page.count("data:image/png;base64,") == 3
+    assert write_thumbnail(tmp_path / "bad") is None  # no plot data: nothing drawn, nothing raised
 
 
 @pytest.mark.parametrize("bad", ["{", "<script>"])

@@ -286,6 +286,9 @@ def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace]
             if status != 0:
                 raise RuntimeError(f"the fit ended with exit status {status}")
             report = json.loads((here.out / "report.json").read_text(encoding="utf-8"))
+            if not getattr(args, "no_plot", False):  # summary.html's small figure, drawn here on every core
+                from ..report.thumbnails import write_thumbnail  # noqa: PLC0415
+                write_thumbnail(here.out)
             return Outcome(index, summary_row(job, report), buf.getvalue())
         except KeyboardInterrupt:
             raise
@@ -310,6 +313,13 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
     if isinstance(workers, bool) or not (isinstance(workers, int) and workers >= 1):
         raise InputError("--workers", workers, "a positive integer (local processes)")
     return ("serial", None) if workers == 1 or n_jobs == 1 else ("local", workers)
+
+
+def _load_summary() -> None:
+    """Import what summary.html needs (matplotlib, ~0.5 s) while the workers fit, not after them."""
+    from ..report.plots import file_figure  # noqa: PLC0415
+    from ..report.summary_html import write_summary_html  # noqa: F401, PLC0415
+    file_figure()
 
 
 def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
@@ -344,7 +354,7 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
         def crashed(i: int, message: str) -> Outcome:
             return _failed(i, jobs[i], base, message, args)
         if kind == "local":
-            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
+            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD, while_waiting=_load_summary)
         else:
             runners.run_dask(run_job, calls, how, report, crashed)
     rows = [outcomes[i].row for i in range(len(jobs))]

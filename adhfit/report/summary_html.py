@@ -2,14 +2,14 @@
 
 A table of every curve (W_ad and μh with their intervals and status, slip, reduced χ², warnings, a link
 to the curve's own report.html), W_ad and μh across curves with their 95 % intervals, and small
-multiples of every curve with its fitted model.  It reads what each fit wrote (report.json and
-plot_data.json in the curve's folder), so it never re-runs a fit.
+multiples of every curve with its fitted model.  It reads what each fit wrote (report.json, and the
+thumbnail.png its batch job drew or else plot_data.json, in the curve's folder), so it never re-runs a fit.
 """
 from __future__ import annotations
 
+import base64
 import datetime as _dt
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -19,10 +19,14 @@ import numpy as np
 from .html_parts import e, figure, num, page, table
 from .plots import file_figure
 from .text import display, estimate_text, interval_text, status_text
+from .thumbnails import thumbnail_png
 
 __all__ = ["write_summary_html", "render_summary_html", "write_plot_data"]
 
 _PARAMS = ("work_of_adhesion", "mu_h")
+#: the small figures of every curve: as many to a row as the page is wide
+_GRID_CSS = (".thumbs{display:grid;grid-template-columns:repeat(auto-fill,minmax(250px,1fr));gap:.5em}"
+             ".thumbs figure{margin:0}.thumbs img{width:100%}")
 
 
 def write_plot_data(result: Any, path: str | Path) -> Path | None:
@@ -105,37 +109,22 @@ def _across(reports: list[dict | None], labels: list[str]):
     return fig
 
 
-def _multiples(plots: list[dict | None], labels: list[str], reports: list[dict | None]):
-    n = len(plots)
-    cols = min(4, n)
-    rows = math.ceil(n / cols)
-    fig, axes = file_figure(rows, cols, figsize=(2.6 * cols, 2.1 * rows), layout="constrained", squeeze=False)
-    for i, ax in enumerate(axes.flat):
-        if i >= n:
-            ax.set_visible(False)
+def _multiples(rows: Sequence[Mapping[str, Any]], labels: list[str], reports: list[dict | None]) -> str:
+    """Every curve's small figure (drawn by its job, :mod:`.thumbnails`) in a grid, captioned with its
+    label and the slip condition its values come from."""
+    cells = []
+    for row, label, rep in zip(rows, labels, reports):
+        short = label if len(label) < 34 else "…" + label[-32:]
+        png = thumbnail_png(row["report_dir"]) if row.get("status") == "ok" and row.get("report_dir") else None
+        if png is None:
+            cells.append(f"<figure class=\"thumb\"><div class=\"status-failed\">no fit</div>"
+                         f"<figcaption class=\"muted\">{e(short)}</figcaption></figure>")
             continue
-        d = plots[i]
-        ax.set_title(labels[i] if len(labels[i]) < 34 else "…" + labels[i][-32:], fontsize=7)
-        ax.tick_params(labelsize=6)
-        if not d:
-            ax.text(0.5, 0.5, "no fit", ha="center", va="center", transform=ax.transAxes, color="#b00")
-            ax.set_xticks([])
-            ax.set_yticks([])
-            continue
-        kx = 1e6 if d.get("control") == "displacement" else 1e-3
-        ax.plot(np.asarray(d["x"], float) * kx, np.asarray(d["force"], float) * 1e3, ".", ms=2, color="#1f77b4",
-                alpha=0.6)
-        m = d.get("model") or {}
-        for part in ("loading", "unloading"):
-            if f"x_{part}" in m:
-                ax.plot(np.asarray(m[f"x_{part}"], float) * kx, np.asarray(m[f"force_{part}"], float) * 1e3,
-                        "-", color="#d62728", lw=0.9)
-        ax.axhline(0.0, color="0.7", lw=0.5)
-        slip = ((reports[i] or {}).get("slip") or {}).get("parameters_from") or ""
-        ax.text(0.03, 0.95, slip, transform=ax.transAxes, fontsize=6, va="top")
-    fig.supxlabel("displacement (µm) or pressure (kPa), as measured", fontsize=8)
-    fig.supylabel("force (mN)", fontsize=8)
-    return fig
+        slip = ((rep or {}).get("slip") or {}).get("parameters_from") or ""
+        data = base64.b64encode(png).decode("ascii")
+        cells.append(f"<figure class=\"thumb\"><img alt=\"{e(label)}\" src=\"data:image/png;base64,{data}\">"
+                     f"<figcaption class=\"muted\">{e(short)}{' · ' + e(slip) if slip else ''}</figcaption></figure>")
+    return f"<div class=\"thumbs\">{''.join(cells)}</div>"
 
 
 def _row_html(i: int, row: Mapping[str, Any], rep: dict | None, label: str, outdir: Path) -> list[str]:
@@ -170,7 +159,6 @@ def render_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -
     """The batch summary page (self-contained) from the summary.csv rows of a batch."""
     outdir = Path(outdir)
     reports = [_load(r, "report.json") for r in rows]
-    plots = [_load(r, "plot_data.json") for r in rows]
     files = [Path(str(r.get("file", ""))).resolve() for r in rows]
     base = Path(os.path.commonpath([str(f.parent) for f in files])) if files else Path(".")
     labels = _labels(rows, base)
@@ -186,12 +174,11 @@ def render_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -
     body.append(table(hdr, [_row_html(i + 1, r, rep, lbl, outdir)
                             for i, (r, rep, lbl) in enumerate(zip(rows, reports, labels))], numeric=(0, 2, 3, 4, 5, 7, 8)))
     if rows:
-        for fig, title, caption in ((_across(reports, labels), "values",
-                                     "W_ad and μh of every curve with 95 % intervals (an orange arrow: a one-sided bound)"),
-                                    (_multiples(plots, labels, reports), "curves",
-                                     "Every curve (blue: data) with its reported fit (red)")):
-            body.append(f"<h2>{e(caption)}</h2>" + figure(title, fig, " "))
-    return page(f"adhfit batch: {len(rows)} curves", body).replace("max-width:62em", "max-width:80em", 1)
+        body.append("<h2>W_ad and μh of every curve with 95 % intervals (an orange arrow: a one-sided bound)</h2>"
+                    + figure("values", _across(reports, labels), " "))
+        body.append("<h2>Every curve (blue: data) with its reported fit (red)</h2>" + _multiples(rows, labels, reports))
+    html = page(f"adhfit batch: {len(rows)} curves", body).replace("max-width:62em", "max-width:80em", 1)
+    return html.replace("</style>", _GRID_CSS + "</style>", 1)
 
 
 def write_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -> Path:
