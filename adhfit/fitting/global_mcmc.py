@@ -46,8 +46,8 @@ __all__ = ["DEFAULTS", "SeriesTarget", "checked_covariance", "fit_global_mcmc", 
 
 #: run settings: n_walkers is raised to 2·ndim (16 for three curves), so two ensembles make the 32 walkers a
 #: step of the single-curve default (4 x 8); R-hat compares the two independent ensembles
-DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 15, "check_every": 5, "max_steps": 400,
-            "evidence_draws": 300}
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 20, "tune_rounds": 4, "check_every": 5,
+            "max_steps": 400, "evidence_draws": 300}
 
 #: a slip condition whose joint least-squares BIC is this far above the other's (a Bayes factor near
 #: e^-50) gets a short run (:data:`SHORT_RUN` steps): enough for its evidence, whose only use is to
@@ -81,7 +81,8 @@ def _run(targets, joint, cfg, root, path, pmap, progress, rejected=frozenset()) 
         ss_run, ss_ev = ss.spawn(2)
         chains[s] = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
                                      n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
-                                     tune_steps=cfg["tune_steps"], check_every=cfg["check_every"],
+                                     tune_steps=cfg["tune_steps"], tune_rounds=cfg["tune_rounds"],
+                                     check_every=cfg["check_every"],
                                      max_steps=min(cfg["max_steps"], SHORT_RUN) if s in rejected else cfg["max_steps"],
                                      path=path, group=s, pmap=pmap, progress=progress)
         diags[s] = diagnose(chains[s], tg.names)

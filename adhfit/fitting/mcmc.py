@@ -274,8 +274,8 @@ def save_chains(path, group: str, chains: Chains, names) -> list[str]:
     return written
 
 
-def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarray,
-                    fallback: StudentT) -> StudentT:
+def _tuned_proposal(sampler, discard: int, theta0: np.ndarray, cov0: np.ndarray,
+                    fallback: StudentT, current: StudentT | None = None) -> StudentT:
     """The proposal for the kept chain, chosen on the ensemble's tuning samples.
 
     Candidates: Student-t fits (:data:`PROPOSAL_DF` degrees of freedom) to the second half of the
@@ -285,8 +285,8 @@ def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarr
     flat ratio means high acceptance, and a proposal too narrow for the posterior shows as a wide
     spread).  Uses the log posteriors already computed: no extra evaluations.
     """
-    x = sampler.get_chain(discard=tune_steps // 2, flat=True)
-    lp = sampler.get_log_prob(discard=tune_steps // 2, flat=True)
+    x = sampler.get_chain(discard=discard, flat=True)
+    lp = sampler.get_log_prob(discard=discard, flat=True)
     ok = np.isfinite(lp)
     x, lp = x[ok], lp[ok]
     if len(x) <= x.shape[1] + 1:
@@ -295,6 +295,8 @@ def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarr
     for inflate in (1.0, PROPOSAL_INFLATE):
         cands.append(StudentT.fit(x, df=PROPOSAL_DF, inflate=inflate))
         cands.append(StudentT(theta0, cov0 * inflate**2 * (PROPOSAL_DF - 2.0) / PROPOSAL_DF, PROPOSAL_DF))
+    if current is not None:
+        cands.append(current)
     spread = []
     for q in cands:
         try:
@@ -313,7 +315,7 @@ def _pooled_tau(chains: list[np.ndarray]) -> np.ndarray:
 
 def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, seed: int,
                      n_walkers: int = 16, n_ensembles: int = 4, tune_steps: int = 20,
-                     check_every: int = 10, max_steps: int = 400, n_tau: float = N_TAU,
+                     check_every: int = 10, max_steps: int = 400, n_tau: float = N_TAU, tune_rounds: int = 1,
                      tau_rtol: float = TAU_RTOL, path=None, group: str = "posterior",
                      pmap: ParallelMap | None = None, progress: bool | None = None) -> Chains:
     """Sample the posterior ``target`` (module docstring).
@@ -330,6 +332,10 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
         ``n_walkers`` is raised to 2·ndim when smaller (emcee's differential-evolution move needs it).
     tune_steps : int
         Steps with the least-squares proposal before it is refitted (always discarded).
+    tune_rounds : int
+        Tuning rounds of ``tune_steps`` steps each; after each the proposal is refitted to that round's
+        samples (the previous proposal is one more candidate), so a poor start covariance is corrected
+        in two steps.  All ``tune_rounds · tune_steps`` steps are discarded.
     check_every : int
         Steps between autocorrelation checks.
     max_steps : int
@@ -377,7 +383,7 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     bar = None
     if show:
         from tqdm import tqdm  # noqa: PLC0415
-        bar = tqdm(total=tune_steps + max_steps, desc=f"MCMC {group}", unit="step", file=sys.stderr,
+        bar = tqdm(total=tune_rounds * tune_steps + max_steps, desc=f"MCMC {group}", unit="step", file=sys.stderr,
                    leave=False)
 
     def advance(n: int) -> None:
@@ -386,9 +392,13 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
         if bar is not None:
             bar.update(n)
 
-    advance(tune_steps)
-    for k, smp in enumerate(samplers):  # refit the proposal to this ensemble's own tuning samples
-        moves[k].proposal = _tuned_proposal(smp, tune_steps, theta0, cov0, first)
+    for r in range(tune_rounds):  # refit the proposal to this ensemble's own latest tuning samples
+        advance(tune_steps)
+        discard = tune_steps // 2 if r == 0 else tune_steps  # round 1 starts from the ball: drop it
+        for k, smp in enumerate(samplers):
+            moves[k].proposal = _tuned_proposal(smp, discard, theta0, cov0, first,
+                                                current=moves[k].proposal if r else None)
+    tune_steps = tune_rounds * tune_steps  # every tuning step is discarded
     acc0 = [smp.backend.accepted.copy() for smp in samplers]
     tau_prev, history, done, steps = None, [], False, 0
     tau = np.full(ndim, np.nan)
