@@ -46,8 +46,8 @@ __all__ = ["DEFAULTS", "SeriesTarget", "checked_covariance", "fit_global_mcmc", 
 
 #: run settings: n_walkers is raised to 2·ndim (16 for three curves), so two ensembles make the 32 walkers a
 #: step of the single-curve default (4 x 8); R-hat compares the two independent ensembles
-DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 20, "tune_rounds": 4, "check_every": 5,
-            "max_steps": 400, "evidence_draws": 300}
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 20, "tune_rounds": 5, "check_every": 5,
+            "max_steps": 800, "evidence_draws": 300}
 
 #: a slip condition whose joint least-squares BIC is this far above the other's (a Bayes factor near
 #: e^-50) gets a short run (:data:`SHORT_RUN` steps): enough for its evidence, whose only use is to
