@@ -15,8 +15,14 @@ needs tens.  The proposal is set in two stages: during the first ``tune_steps`` 
 least-squares Laplace approximation with wide tails (5 degrees of freedom, standard deviations × 1.55);
 then, once per ensemble, it is replaced by the best of four Student-t candidates (fitted to that
 ensemble's tuning samples, or the Laplace approximation; standard deviations × 1 or × 1.15; the one
-whose ln π - ln q varies least over the tuning samples, :func:`_tuned_proposal`) and frozen.  The
-tuning steps are always discarded, so the kept chain comes from one fixed, valid Markov kernel.
+whose ln π - ln q varies least over the tuning samples, :func:`_tuned_proposal`) and frozen.  With
+``tune_rounds`` > 1 (a series fit) the tuning is repeated: after each further round of ``tune_steps``
+steps the proposal is refitted to every sample since the end of the first round (which starts from the
+ball and is dropped), the previous proposal being one more candidate.  One refit from the first
+round's few correlated samples left the acceptance at 0.3 and τ at ~10 steps on a three-curve series
+with the contact radius, whose posterior is skewed near each curve's fold; five rounds give 0.4–0.6
+and τ 3–7 steps (benchmarks/results/recovery_series.md).  The tuning steps are always discarded, so
+the kept chain comes from one fixed, valid Markov kernel.
 
 Run length from the data
 ------------------------
@@ -24,7 +30,7 @@ After tuning, every ``check_every`` steps the integrated autocorrelation time τ
 is estimated (emcee's ``integrated_time(tol=0)``, pooled over all walkers of all ensembles).  The
 run stops when the kept chain is longer than ``n_tau`` (50) τ_max and every τ changed by less than
 ``tau_rtol`` since the previous check, or at ``max_steps`` (then a warning says the cap was hit).
-Burn-in = tuning steps + ceil(2 τ_max); thinning = max(1, floor(τ_min / 2)).
+Burn-in = all tuning steps + ceil(2 τ_max); thinning = max(1, floor(τ_min / 2)).
 
 Randomness and storage
 ----------------------
