@@ -82,17 +82,19 @@ class _SkewNormal:
 def test_tuning_rounds_fix_a_skewed_posterior_with_a_poor_start():
     """A skewed 8-D posterior started from its mode with one start standard error 0.35 of the right one
     (as the series fit's start covariance can be): one refit of the proposal from the first 7 steps
-    mixes slowly (acceptance ~0.25, τ ~30 steps: not converged at 800 steps with seeds 1-3), five
-    tuning rounds converge.  Moments against the skew-normal's closed form; tolerances ≥ 3 Monte-Carlo
+    mixes slowly (acceptance ~0.25, τ ~30 steps: not converged at 800 steps with seeds 1-3), tuning
+    rounds until the proposal settles converge.  Moments against the skew-normal's closed form; tolerances ≥ 3 Monte-Carlo
     standard errors at the converged run's ESS (> 1000)."""
     g = _SkewNormal()
     d = np.ones(8)
     d[2] = 0.35
     cov0 = g.L @ g.L.T * np.outer(d, d)
     kw = dict(seed=1, n_walkers=8, n_ensembles=2, check_every=5, progress=False)
-    ch = sample_posterior(g, np.zeros(8), cov0, tune_steps=20, tune_rounds=5, max_steps=800, **kw)
+    ch = sample_posterior(g, np.zeros(8), cov0, tune_steps=20, tune_rounds=12, max_steps=800, **kw)
     dg = diagnose(ch, g.names)
-    assert dg["converged"] and ch.tune_steps == 100 and ch.burn >= 100, dg["warnings"]
+    assert dg["converged"], dg["warnings"]
+    # tuning stops once the proposal settles (at least 3 rounds), and every tuning step is discarded
+    assert ch.tune_steps % 20 == 0 and 60 <= ch.tune_steps < 240 and ch.burn >= ch.tune_steps
     sd = np.sqrt(np.diag(g.cov))
     np.testing.assert_allclose(ch.flat.mean(0) / sd, g.mean / sd, atol=0.12)
     np.testing.assert_allclose(np.std(ch.flat, axis=0) / sd, 1.0, atol=0.08)

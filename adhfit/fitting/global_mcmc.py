@@ -46,10 +46,11 @@ __all__ = ["DEFAULTS", "SeriesTarget", "checked_covariance", "fit_global_mcmc", 
 
 #: run settings: n_walkers is raised to 2·ndim (16 for three curves), so two ensembles make the 32 walkers a
 #: step of the single-curve default (4 x 8); R-hat compares the two independent ensembles.  The proposal
-#: is refitted after each of ``tune_rounds`` rounds (:func:`.mcmc.sample_posterior`): with the contact
-#: radius the posterior is skewed near each curve's fold and one refit from 7 steps left τ at ~10 steps
-#: (not converged at 400); 5 rounds of 20 steps give τ 3–7, so 220–400 kept steps (800 is the cap)
-DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 20, "tune_rounds": 5, "check_every": 5,
+#: is refitted after each of up to ``tune_rounds`` rounds, until it settles (:func:`.mcmc.sample_posterior`):
+#: with the contact radius the posterior is skewed near each curve's fold, the least-squares start scales
+#: can be 2-7 times too small, and one refit from 7 steps left τ at ~10-30 steps (not converged at 400);
+#: 3-7 rounds of 20 steps give τ 3-4, so 200-400 kept steps (800 is the cap)
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 20, "tune_rounds": 12, "check_every": 5,
             "max_steps": 800, "evidence_draws": 300}
 
 #: a slip condition whose joint least-squares BIC is this far above the other's (a Bayes factor near
@@ -165,7 +166,7 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, workers, stage, pat
         "priors": {k: p.as_dict() for k, p in zip(targets[rep].names, targets[rep].priors)},
         "settings": cfg | {"workers": workers},
         "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a Student-t refitted "
-                   f"after each of {cfg['tune_rounds']} tuning rounds (90 %) + differential evolution (10 %); "
+                   f"after each of up to {cfg['tune_rounds']} tuning rounds (90 %) + differential evolution (10 %); "
                    "see adhfit.fitting.mcmc",
         "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap "
                          f"({SHORT_RUN} steps for a condition the least-squares fit rejects by ΔBIC > {REJECT_DBIC:g})",

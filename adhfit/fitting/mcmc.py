@@ -70,6 +70,11 @@ INDEPENDENCE_SHARE = 0.9
 #: the tuned independence proposal: Student-t degrees of freedom, and the factor on the posterior sd
 PROPOSAL_DF = 10.0
 PROPOSAL_INFLATE = 1.15
+#: tuning rounds (``tune_rounds`` > 1): at least this many, then stop once the proposal has settled
+TUNE_MIN_ROUNDS = 3
+TUNE_SETTLED = 0.2
+#: factor on the proposal's standard deviations while tuning (between rounds)
+TUNE_EXPLORE = 1.5
 
 _TARGETS: dict[int, Any] = {}  # read by forked workers (see ParallelMap)
 
@@ -312,6 +317,40 @@ def _tuned_proposal(sampler, discard: int, theta0: np.ndarray, cov0: np.ndarray,
     return cands[int(np.argmin(spread))] if np.isfinite(min(spread)) else fallback
 
 
+def _settled(old: StudentT, new: StudentT) -> bool:
+    """Two proposals agree: every mean within :data:`TUNE_SETTLED` standard deviations of the other's,
+    every standard deviation within a factor 1 + :data:`TUNE_SETTLED`."""
+    sd_old, sd_new = np.sqrt(np.diag(old.scale)), np.sqrt(np.diag(new.scale))
+    return bool(np.all(np.abs(new.mean - old.mean) < TUNE_SETTLED * sd_new)
+                and np.all(np.abs(np.log(sd_new / sd_old)) < math.log1p(TUNE_SETTLED)))
+
+
+def _tune(samplers, moves, advance, tune_steps: int, tune_rounds: int, theta0, cov0, first) -> int:
+    """Tuning rounds (module docstring); returns the tuning steps run (all discarded).
+
+    After round r the proposal is refitted to the later half of that ensemble's tuning samples (round 1:
+    its second half); from :data:`TUNE_MIN_ROUNDS` rounds on, tuning stops once no ensemble's
+    proposal moved (:func:`_settled`) in the last round, else after ``tune_rounds`` rounds.  Between
+    rounds the walkers propose from the refitted proposal widened by :data:`TUNE_EXPLORE` (a start
+    covariance several times too narrow is then outgrown in a few rounds); the kept chain uses the
+    refitted proposal itself.
+    """
+    fitted = [None] * len(samplers)
+    for r in range(tune_rounds):
+        advance(tune_steps)
+        done = (r + 1) * tune_steps
+        discard = tune_steps // 2 if r == 0 else max(tune_steps, done // 2)
+        old = list(fitted)
+        fitted = [_tuned_proposal(smp, discard, theta0, cov0, first, current=old[k])
+                  for k, smp in enumerate(samplers)]
+        last = r + 1 == tune_rounds or (r + 1 >= TUNE_MIN_ROUNDS and all(map(_settled, old, fitted)))
+        for m, q in zip(moves, fitted):
+            m.proposal = q if last else StudentT(q.mean, q.scale * TUNE_EXPLORE**2, q.df)
+        if last:
+            return done
+    return 0
+
+
 def _pooled_tau(chains: list[np.ndarray]) -> np.ndarray:
     """τ per parameter of the production chains of every ensemble (walkers pooled), emcee's estimator."""
     x = np.concatenate(chains, axis=1)  # (steps, all walkers, ndim)
@@ -339,9 +378,10 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     tune_steps : int
         Steps with the least-squares proposal before it is refitted (always discarded).
     tune_rounds : int
-        Tuning rounds of ``tune_steps`` steps each; after each the proposal is refitted to that round's
-        samples (the previous proposal is one more candidate), so a poor start covariance is corrected
-        in two steps.  All ``tune_rounds · tune_steps`` steps are discarded.
+        Most tuning rounds of ``tune_steps`` steps each; after each the proposal is refitted (the
+        previous proposal is one more candidate), so a poor start covariance is corrected; from
+        :data:`TUNE_MIN_ROUNDS` rounds on tuning stops once the proposal has settled (:func:`_tune`).
+        Every tuning step is discarded.
     check_every : int
         Steps between autocorrelation checks.
     max_steps : int
@@ -398,13 +438,7 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
         if bar is not None:
             bar.update(n)
 
-    for r in range(tune_rounds):  # refit the proposal to this ensemble's own latest tuning samples
-        advance(tune_steps)
-        discard = tune_steps // 2 if r == 0 else tune_steps  # round 1 starts from the ball: drop it
-        for k, smp in enumerate(samplers):
-            moves[k].proposal = _tuned_proposal(smp, discard, theta0, cov0, first,
-                                                current=moves[k].proposal if r else None)
-    tune_steps = tune_rounds * tune_steps  # every tuning step is discarded
+    tune_steps = _tune(samplers, moves, advance, tune_steps, tune_rounds, theta0, cov0, first)
     acc0 = [smp.backend.accepted.copy() for smp in samplers]
     tau_prev, history, done, steps = None, [], False, 0
     tau = np.full(ndim, np.nan)
