@@ -16,13 +16,15 @@ least-squares Laplace approximation with wide tails (5 degrees of freedom, stand
 then, once per ensemble, it is replaced by the best of four Student-t candidates (fitted to that
 ensemble's tuning samples, or the Laplace approximation; standard deviations × 1 or × 1.15; the one
 whose ln π - ln q varies least over the tuning samples, :func:`_tuned_proposal`) and frozen.  With
-``tune_rounds`` > 1 (a series fit) the tuning is repeated: after each further round of ``tune_steps``
-steps the proposal is refitted to every sample since the end of the first round (which starts from the
-ball and is dropped), the previous proposal being one more candidate.  One refit from the first
-round's few correlated samples left the acceptance at 0.3 and τ at ~10 steps on a three-curve series
-with the contact radius, whose posterior is skewed near each curve's fold; five rounds give 0.4–0.6
-and τ 3–7 steps (benchmarks/results/recovery_series.md).  The tuning steps are always discarded, so
-the kept chain comes from one fixed, valid Markov kernel.
+``tune_rounds`` > 1 (a series fit) the tuning is repeated (:func:`_tune`): after each further round of
+``tune_steps`` steps the proposal is refitted to the later half of the tuning samples (the previous
+fit being one more candidate), the walkers propose from it widened 1.5-fold during the next round,
+and tuning stops once the fit has settled (at least 3 rounds, at most ``tune_rounds``).  On a
+three-curve series with the contact radius, whose posterior is skewed near each curve's fold and whose
+least-squares scales can be 2-7 times too small, one refit from the first round's few correlated
+samples left the acceptance at 0.3 and τ at 10-30 steps (not converged at 400-800 steps); the rounds
+give 0.4-0.6 and τ 3-6 steps (benchmarks/results/recovery_series.md).  The tuning steps are always
+discarded, so the kept chain comes from one fixed, valid Markov kernel.
 
 Run length from the data
 ------------------------
