@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy import integrate
+from scipy import integrate, special
 
 from adhfit.fitting.diagnostics import diagnose
 from adhfit.fitting.mcmc import sample_posterior
@@ -74,22 +74,21 @@ class _SkewNormal:
         self.cov = self.L @ np.diag([1 - 2 * dl**2 / math.pi] + [1.0] * 7) @ self.L.T
 
     def __call__(self, t):
-        from scipy import special
         z = np.linalg.solve(self.L, np.asarray(t, float))
         return float(-0.5 * z @ z + special.log_ndtr(self.alpha * z[0]))
 
 
 def test_tuning_rounds_fix_a_skewed_posterior_with_a_poor_start():
-    """A skewed 8-D posterior started from its mode with one start standard error 0.35 of the right one
-    (as the series fit's start covariance can be): one refit of the proposal from the first 7 steps
-    mixes slowly (acceptance ~0.25, τ ~30 steps: not converged at 800 steps with seeds 1-3), tuning
-    rounds until the proposal settles converge.  Moments against the skew-normal's closed form; tolerances ≥ 3 Monte-Carlo
-    standard errors at the converged run's ESS (> 1000)."""
+    """A skewed 8-D posterior started at θ = 0 (z_0 = 0, off its mode and mean) with one start standard
+    error 0.35 of the right one (as a series fit's start covariance can be): one refit of the proposal
+    from the first 7 steps mixes slowly (acceptance ~0.25, τ ~30 steps: not converged at 800 steps with
+    seeds 1-3), tuning rounds until the proposal settles converge.  Moments against the skew-normal's
+    closed form; tolerances ≥ 3 Monte-Carlo standard errors at the converged run's ESS (> 1000)."""
     g = _SkewNormal()
     d = np.ones(8)
     d[2] = 0.35
     cov0 = g.L @ g.L.T * np.outer(d, d)
-    kw = dict(seed=1, n_walkers=8, n_ensembles=2, check_every=5, progress=False)
+    kw = {"seed": 1, "n_walkers": 8, "n_ensembles": 2, "check_every": 5, "progress": False}
     ch = sample_posterior(g, np.zeros(8), cov0, tune_steps=20, tune_rounds=12, max_steps=800, **kw)
     dg = diagnose(ch, g.names)
     assert dg["converged"], dg["warnings"]
