@@ -45,9 +45,13 @@ from .selection import compare
 __all__ = ["DEFAULTS", "SeriesTarget", "checked_covariance", "fit_global_mcmc", "series_priors"]
 
 #: run settings: n_walkers is raised to 2·ndim (16 for three curves), so two ensembles make the 32 walkers a
-#: step of the single-curve default (4 x 8); R-hat compares the two independent ensembles
-DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 15, "check_every": 5, "max_steps": 400,
-            "evidence_draws": 300}
+#: step of the single-curve default (4 x 8); R-hat compares the two independent ensembles.  The proposal
+#: is refitted after each of up to ``tune_rounds`` rounds, until it settles (:func:`.mcmc.sample_posterior`):
+#: with the contact radius the posterior is skewed near each curve's fold, the least-squares start scales
+#: can be 2-7 times too small, and one refit from 7 steps left τ at ~10-30 steps (not converged at 400);
+#: 3-7 rounds of 20 steps give τ 3-4, so 200-400 kept steps (800 is the cap)
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 2, "tune_steps": 20, "tune_rounds": 12, "check_every": 5,
+            "max_steps": 800, "evidence_draws": 300}
 
 #: a slip condition whose joint least-squares BIC is this far above the other's (a Bayes factor near
 #: e^-50) gets a short run (:data:`SHORT_RUN` steps): enough for its evidence, whose only use is to
@@ -81,7 +85,8 @@ def _run(targets, joint, cfg, root, path, pmap, progress, rejected=frozenset()) 
         ss_run, ss_ev = ss.spawn(2)
         chains[s] = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
                                      n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
-                                     tune_steps=cfg["tune_steps"], check_every=cfg["check_every"],
+                                     tune_steps=cfg["tune_steps"], tune_rounds=cfg["tune_rounds"],
+                                     check_every=cfg["check_every"],
                                      max_steps=min(cfg["max_steps"], SHORT_RUN) if s in rejected else cfg["max_steps"],
                                      path=path, group=s, pmap=pmap, progress=progress)
         diags[s] = diagnose(chains[s], tg.names)
@@ -160,8 +165,9 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, workers, stage, pat
         "seed": seed, "noise_model": targets[rep].noise_model, "converged": converged,
         "priors": {k: p.as_dict() for k, p in zip(targets[rep].names, targets[rep].priors)},
         "settings": cfg | {"workers": workers},
-        "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a tuned Student-t "
-                   "(90 %) + differential evolution (10 %); see adhfit.fitting.mcmc",
+        "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a Student-t refitted "
+                   f"after each of up to {cfg['tune_rounds']} tuning rounds (90 %) + differential evolution (10 %); "
+                   "see adhfit.fitting.mcmc",
         "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap "
                          f"({SHORT_RUN} steps for a condition the least-squares fit rejects by ΔBIC > {REJECT_DBIC:g})",
         "short_runs": sorted(s for s, d in diags.items() if d.get("short_run")),

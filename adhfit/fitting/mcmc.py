@@ -15,8 +15,16 @@ needs tens.  The proposal is set in two stages: during the first ``tune_steps`` 
 least-squares Laplace approximation with wide tails (5 degrees of freedom, standard deviations × 1.55);
 then, once per ensemble, it is replaced by the best of four Student-t candidates (fitted to that
 ensemble's tuning samples, or the Laplace approximation; standard deviations × 1 or × 1.15; the one
-whose ln π - ln q varies least over the tuning samples, :func:`_tuned_proposal`) and frozen.  The
-tuning steps are always discarded, so the kept chain comes from one fixed, valid Markov kernel.
+whose ln π - ln q varies least over the tuning samples, :func:`_tuned_proposal`) and frozen.  With
+``tune_rounds`` > 1 (a series fit) the tuning is repeated (:func:`_tune`): after each further round of
+``tune_steps`` steps the proposal is refitted to the later half of the tuning samples (the previous
+fit being one more candidate), the walkers propose from it widened 1.5-fold during the next round,
+and tuning stops once the fit has settled (at least 3 rounds, at most ``tune_rounds``).  On a
+three-curve series with the contact radius, whose posterior is skewed near each curve's fold and whose
+least-squares scales can be 2-7 times too small, one refit from the first round's few correlated
+samples left the acceptance at 0.3 and τ at 10-30 steps (not converged at 400-800 steps); the rounds
+give 0.4-0.6 and τ 3-6 steps (benchmarks/results/recovery_series.md).  The tuning steps are always
+discarded, so the kept chain comes from one fixed, valid Markov kernel.
 
 Run length from the data
 ------------------------
@@ -24,7 +32,7 @@ After tuning, every ``check_every`` steps the integrated autocorrelation time τ
 is estimated (emcee's ``integrated_time(tol=0)``, pooled over all walkers of all ensembles).  The
 run stops when the kept chain is longer than ``n_tau`` (50) τ_max and every τ changed by less than
 ``tau_rtol`` since the previous check, or at ``max_steps`` (then a warning says the cap was hit).
-Burn-in = tuning steps + ceil(2 τ_max); thinning = max(1, floor(τ_min / 2)).
+Burn-in = all tuning steps + ceil(2 τ_max); thinning = max(1, floor(τ_min / 2)).
 
 Randomness and storage
 ----------------------
@@ -64,6 +72,11 @@ INDEPENDENCE_SHARE = 0.9
 #: the tuned independence proposal: Student-t degrees of freedom, and the factor on the posterior sd
 PROPOSAL_DF = 10.0
 PROPOSAL_INFLATE = 1.15
+#: tuning rounds (``tune_rounds`` > 1): at least this many, then stop once the proposal has settled
+TUNE_MIN_ROUNDS = 3
+TUNE_SETTLED = 0.2
+#: factor on the proposal's standard deviations while tuning (between rounds)
+TUNE_EXPLORE = 1.5
 
 _TARGETS: dict[int, Any] = {}  # read by forked workers (see ParallelMap)
 
@@ -274,8 +287,8 @@ def save_chains(path, group: str, chains: Chains, names) -> list[str]:
     return written
 
 
-def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarray,
-                    fallback: StudentT) -> StudentT:
+def _tuned_proposal(sampler, discard: int, theta0: np.ndarray, cov0: np.ndarray,
+                    fallback: StudentT, current: StudentT | None = None) -> StudentT:
     """The proposal for the kept chain, chosen on the ensemble's tuning samples.
 
     Candidates: Student-t fits (:data:`PROPOSAL_DF` degrees of freedom) to the second half of the
@@ -285,8 +298,8 @@ def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarr
     flat ratio means high acceptance, and a proposal too narrow for the posterior shows as a wide
     spread).  Uses the log posteriors already computed: no extra evaluations.
     """
-    x = sampler.get_chain(discard=tune_steps // 2, flat=True)
-    lp = sampler.get_log_prob(discard=tune_steps // 2, flat=True)
+    x = sampler.get_chain(discard=discard, flat=True)
+    lp = sampler.get_log_prob(discard=discard, flat=True)
     ok = np.isfinite(lp)
     x, lp = x[ok], lp[ok]
     if len(x) <= x.shape[1] + 1:
@@ -295,6 +308,8 @@ def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarr
     for inflate in (1.0, PROPOSAL_INFLATE):
         cands.append(StudentT.fit(x, df=PROPOSAL_DF, inflate=inflate))
         cands.append(StudentT(theta0, cov0 * inflate**2 * (PROPOSAL_DF - 2.0) / PROPOSAL_DF, PROPOSAL_DF))
+    if current is not None:
+        cands.append(current)
     spread = []
     for q in cands:
         try:
@@ -302,6 +317,40 @@ def _tuned_proposal(sampler, tune_steps: int, theta0: np.ndarray, cov0: np.ndarr
         except np.linalg.LinAlgError:
             spread.append(np.inf)
     return cands[int(np.argmin(spread))] if np.isfinite(min(spread)) else fallback
+
+
+def _settled(old: StudentT, new: StudentT) -> bool:
+    """Two proposals agree: every mean within :data:`TUNE_SETTLED` standard deviations of the other's,
+    every standard deviation within a factor 1 + :data:`TUNE_SETTLED`."""
+    sd_old, sd_new = np.sqrt(np.diag(old.scale)), np.sqrt(np.diag(new.scale))
+    return bool(np.all(np.abs(new.mean - old.mean) < TUNE_SETTLED * sd_new)
+                and np.all(np.abs(np.log(sd_new / sd_old)) < math.log1p(TUNE_SETTLED)))
+
+
+def _tune(samplers, moves, advance, tune_steps: int, tune_rounds: int, theta0, cov0, first) -> int:
+    """Tuning rounds (module docstring); returns the tuning steps run (all discarded).
+
+    After round r the proposal is refitted to the later half of that ensemble's tuning samples (round 1:
+    its second half); from :data:`TUNE_MIN_ROUNDS` rounds on, tuning stops once no ensemble's
+    proposal moved (:func:`_settled`) in the last round, else after ``tune_rounds`` rounds.  Between
+    rounds the walkers propose from the refitted proposal widened by :data:`TUNE_EXPLORE` (a start
+    covariance several times too narrow is then outgrown in a few rounds); the kept chain uses the
+    refitted proposal itself.
+    """
+    fitted = [None] * len(samplers)
+    for r in range(tune_rounds):
+        advance(tune_steps)
+        done = (r + 1) * tune_steps
+        discard = tune_steps // 2 if r == 0 else max(tune_steps, done // 2)
+        old = list(fitted)
+        fitted = [_tuned_proposal(smp, discard, theta0, cov0, first, current=old[k])
+                  for k, smp in enumerate(samplers)]
+        last = r + 1 == tune_rounds or (r + 1 >= TUNE_MIN_ROUNDS and all(map(_settled, old, fitted)))
+        for m, q in zip(moves, fitted):
+            m.proposal = q if last else StudentT(q.mean, q.scale * TUNE_EXPLORE**2, q.df)
+        if last:
+            return done
+    return 0
 
 
 def _pooled_tau(chains: list[np.ndarray]) -> np.ndarray:
@@ -313,7 +362,7 @@ def _pooled_tau(chains: list[np.ndarray]) -> np.ndarray:
 
 def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, seed: int,
                      n_walkers: int = 16, n_ensembles: int = 4, tune_steps: int = 20,
-                     check_every: int = 10, max_steps: int = 400, n_tau: float = N_TAU,
+                     check_every: int = 10, max_steps: int = 400, n_tau: float = N_TAU, tune_rounds: int = 1,
                      tau_rtol: float = TAU_RTOL, path=None, group: str = "posterior",
                      pmap: ParallelMap | None = None, progress: bool | None = None) -> Chains:
     """Sample the posterior ``target`` (module docstring).
@@ -330,6 +379,11 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
         ``n_walkers`` is raised to 2·ndim when smaller (emcee's differential-evolution move needs it).
     tune_steps : int
         Steps with the least-squares proposal before it is refitted (always discarded).
+    tune_rounds : int
+        Most tuning rounds of ``tune_steps`` steps each; after each the proposal is refitted (the
+        previous proposal is one more candidate), so a poor start covariance is corrected; from
+        :data:`TUNE_MIN_ROUNDS` rounds on tuning stops once the proposal has settled (:func:`_tune`).
+        Every tuning step is discarded.
     check_every : int
         Steps between autocorrelation checks.
     max_steps : int
@@ -377,7 +431,7 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     bar = None
     if show:
         from tqdm import tqdm  # noqa: PLC0415
-        bar = tqdm(total=tune_steps + max_steps, desc=f"MCMC {group}", unit="step", file=sys.stderr,
+        bar = tqdm(total=tune_rounds * tune_steps + max_steps, desc=f"MCMC {group}", unit="step", file=sys.stderr,
                    leave=False)
 
     def advance(n: int) -> None:
@@ -386,9 +440,7 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
         if bar is not None:
             bar.update(n)
 
-    advance(tune_steps)
-    for k, smp in enumerate(samplers):  # refit the proposal to this ensemble's own tuning samples
-        moves[k].proposal = _tuned_proposal(smp, tune_steps, theta0, cov0, first)
+    tune_steps = _tune(samplers, moves, advance, tune_steps, tune_rounds, theta0, cov0, first)
     acc0 = [smp.backend.accepted.copy() for smp in samplers]
     tau_prev, history, done, steps = None, [], False, 0
     tau = np.full(ndim, np.nan)
