@@ -19,7 +19,7 @@ from . import kernels as K
 
 __all__ = ["Config", "State", "evaluate", "release_rate", "DEFAULT_N"]
 
-DEFAULT_N = 20  # steps per segment: ~1e-9 on the summary against n = 128 (benchmarks/results/exact.md)
+DEFAULT_N = 12  # steps per segment: <~1e-8 on the summary against n = 128 (benchmarks/results/exact.md)
 
 
 @dataclass(frozen=True)
