@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
 from .control import Control, prepare
-from .march import PREDICT
+from .march import PREDICT, vertex
 from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
@@ -233,21 +233,10 @@ def _delamination(cfg, c, m, on):
 
 
 def _vertex(x, y, c, h):
-    """The minimum of the polynomial through (x, y) nearest the centre c (scale h): Newton on its
-    derivative from the least sample; None if it does not converge within 2.5 h of c."""
-    t = (np.asarray(x, dtype=float) - c) / h
-    coef = np.linalg.solve(np.vander(t), np.asarray(y, dtype=float))
-    d1 = np.polyder(coef)
-    d2 = np.polyder(d1)
-    r = t[int(np.argmin(y))]
-    for _ in range(30):
-        step = np.polyval(d1, r) / np.polyval(d2, r)
-        r -= step
-        if not abs(r) <= 2.5:
-            return None
-        if abs(step) < 1e-13:
-            return c + h * r if np.polyval(d2, r) > 0.0 else None
-    return None
+    """The minimum of the polynomial through (x, y) nearest the centre c (scale h) (``march.vertex``,
+    compiled); None if Newton on its derivative does not converge within 2.5 h of c."""
+    v = vertex(np.asarray(x, dtype=float), np.asarray(y, dtype=float), float(c), float(h))
+    return None if math.isnan(v) else float(v)
 
 
 def _extremum(stage, states, key, sign):

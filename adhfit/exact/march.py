@@ -15,7 +15,7 @@ from . import kernels as K
 from . import newton as N
 from .jit import jit
 
-__all__ = ["march_rows", "PREDICT"]
+__all__ = ["march_rows", "vertex", "PREDICT"]
 
 PREDICT = 6  # states the predictor extrapolates through (quintic)
 
@@ -75,3 +75,42 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
         rows[i, :k] = x
         rows[i, k:] = o
     return m, rows, J, total
+
+
+@jit
+def vertex(x, y, c, h):
+    """The minimum of the polynomial through (x, y) nearest the centre c (scale h): Newton on its
+    derivative from the least sample; NaN if it does not converge within 2.5 h of c (or at a point
+    that is not a minimum)."""
+    m = x.shape[0]
+    t = (x - c) / h
+    V = np.empty((m, m))
+    for i in range(m):
+        for j in range(m):
+            V[i, j] = t[i] ** (m - 1 - j)
+    coef, ok = N._lin_solve(V, y)
+    if not ok:
+        return np.nan
+    r = t[np.argmin(y)]
+    for _ in range(30):
+        d1, d2 = _derivatives(coef, r)
+        step = d1 / d2
+        r -= step
+        if not abs(r) <= 2.5:
+            return np.nan
+        if abs(step) < 1e-13:
+            return c + h * r if _derivatives(coef, r)[1] > 0.0 else np.nan
+    return np.nan
+
+
+@jit
+def _derivatives(coef, r):
+    """First and second derivative at r of the polynomial with coefficients ``coef`` (highest first)."""
+    m = coef.shape[0]
+    d1, d2 = 0.0, 0.0
+    for j in range(m - 1):
+        pw = m - 1 - j
+        d1 += pw * coef[j] * r ** (pw - 1)
+        if pw >= 2:
+            d2 += pw * (pw - 1) * coef[j] * r ** (pw - 2)
+    return d1, d2
