@@ -94,8 +94,10 @@ for _j in range(12):
 
 
 @jit
-def _steps(kind, y, rho1, eps, K, n, par):
-    """n steps of DOP853's 8th-order solution in s on [0, 1], rho = rho1 + eps sinh(K s); y in place.
+def _steps(kind, y, rho1, eps, K, mu, par):
+    """mu (>= 1, real) steps of DOP853's 8th-order solution in s on [0, 1], rho = rho1 + eps sinh(K s);
+    y in place: floor(mu) steps of 1/mu and a last partial one, so that the result is continuous in
+    mu (a step count that jumps with a state's data would make the discretization error jump).
 
     Only the first ``mo`` components of y enter the right-hand side; the others are quadratures, whose
     stage values are never needed (the same result, fewer operations). The mesh's exp(K s) at the
@@ -103,7 +105,11 @@ def _steps(kind, y, rho1, eps, K, n, par):
     """
     m = y.shape[0]
     mo = 4 if kind == FREE else 2
-    h = 1.0 / n
+    hf = 1.0 / mu
+    nf = int(mu)
+    rem = 1.0 - nf * hf
+    total = nf + 1 if rem > 1e-9 * hf else nf
+    h = hf
     k = np.empty((12, m))
     yt = np.empty(m)
     ec = np.empty(12)
@@ -114,7 +120,14 @@ def _steps(kind, y, rho1, eps, K, n, par):
     g, ig = math.exp(K * h), math.exp(-K * h)
     e0, ie0 = 1.0, 1.0
     he, hk = 0.5 * eps, 0.5 * eps * K
-    for i in range(n):
+    for i in range(total):
+        if i == nf:  # the partial last step
+            h = rem
+            e0 = math.exp(K * nf * hf)
+            ie0 = 1.0 / e0
+            for j in range(12):
+                ec[j] = math.exp(K * C[j] * h)
+                ie[j] = 1.0 / ec[j]
         for j in range(12):
             for q in range(mo):
                 yt[q] = y[q]
@@ -139,7 +152,7 @@ def _steps(kind, y, rho1, eps, K, n, par):
                 acc += B[j] * k[j, q]
             y[q] += h * acc
         if i % 8 == 7:
-            e0 = math.exp(K * (i + 1) * h)
+            e0 = math.exp(K * (i + 1) * hf)
             ie0 = 1.0 / e0
         else:
             e0 *= g
@@ -148,7 +161,8 @@ def _steps(kind, y, rho1, eps, K, n, par):
 
 @jit
 def integrate(kind, y0, rho1, rho2, eps, n, par, A, B, C):
-    """Integrate from rho1 to rho2 in n fixed steps of s on the graded mesh rho = rho1 + eps sinh(K s).
+    """Integrate from rho1 to rho2 in n (real, >= 1: see ``_steps``) fixed steps of s on the graded mesh
+    rho = rho1 + eps sinh(K s).
 
     eps sets the grading (steps ~ eps near rho1, geometric growth beyond); K = asinh((rho2-rho1)/eps).
     (A, B, C: the Dormand-Prince tableau, kept in the signature; the module's own copy is used.)
@@ -159,10 +173,10 @@ def integrate(kind, y0, rho1, rho2, eps, n, par, A, B, C):
     K = math.asinh((rho2 - rho1) / eps)
     if kind == FREE:  # the angle as its cosine and sine while integrating
         w = np.array([y[0], math.cos(y[2]), math.sin(y[2]), y[3], y[1], y[4], y[5]])
-        _steps(FREE, w, rho1, eps, K, n, par)
+        _steps(FREE, w, rho1, eps, K, float(n), par)
         y[0], y[1], y[2], y[3], y[4], y[5] = w[0], w[4], math.atan2(w[2], w[1]), w[3], w[5], w[6]
     else:
-        _steps(CONTACT, y, rho1, eps, K, n, par)
+        _steps(CONTACT, y, rho1, eps, K, float(n), par)
     return y
 
 
@@ -198,14 +212,17 @@ def free_from_edge(y0, rho_a, beta, n, p, A, B, C):
     """Integrate the free membrane from the contact edge rho_a to the clamp beta.
 
     The mesh is graded towards the edge (steps ~ rho_a there); a small contact is near the apex, whose
-    1/rho terms the grading resolves geometrically, so the steps grow with the number of e-folds,
-    asinh((beta - rho_a)/rho_a): FREE_APEX n steps per ``K_APEX`` e-folds, as a free segment from the
-    apex (which a free segment from a small edge resembles), and at least n (rho_a >~ 0.07 beta).
+    1/rho terms the grading resolves geometrically, so the steps grow with the number of e-folds K =
+    asinh((beta - rho_a)/rho_a): FREE_APEX n per ``K_APEX`` e-folds (a free segment from a small edge
+    resembles one from the apex), at least n (rho_a >~ 0.08 beta). The count is real (``_steps``): a
+    count rounded up jumped by a step at some rho_a, the discretization error with it, and such a jump
+    inside the stencil of an extremum's refinement (``history._extremum``) moved the extremum (by
+    1.5e-7 in a at n = 12, where a turning point lay).
     """
     eps = min(rho_a, beta - rho_a)
     if eps <= 0.0:
         return y0.copy()
-    m = max(n, math.ceil(FREE_APEX * n * math.asinh((beta - rho_a) / eps) / K_APEX))
+    m = max(float(n), FREE_APEX * n * math.asinh((beta - rho_a) / eps) / K_APEX)
     return integrate(FREE, y0, rho_a, beta, eps, m, p, A, B, C)
 
 
