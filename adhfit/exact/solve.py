@@ -61,11 +61,11 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
 
 def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: tuple, targets: dict,
                param: str, values, vs: list, xs: list, x0, *, tol: float = 1e-10, max_iter: int = 40,
-               memo: dict) -> list:
+               memo: dict, scale: float = 0.0) -> list:
     """``solve_state`` at each of ``values`` of the parameter ``param`` (a key of ``fixed`` or of
     ``targets``) in one compiled call, continuing from the solved (``vs``, ``xs``) (Lagrange predictor,
-    Jacobian carried along). Returns the states solved before the first failure (or a state turning
-    past vertical at the clamp)."""
+    Jacobian carried along; ``scale``: see ``march.abscissa``). Returns the states solved before the
+    first failure (or a state turning past vertical at the clamp)."""
     vals, unk, res, tg, J = _arrays(fixed, unknowns, residuals, targets, memo)
     in_tg = param in targets
     pidx = ("a", "d", "w").index(param) if in_tg else _KEYS.index(param)
@@ -73,7 +73,7 @@ def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: 
     hist = np.asarray(xs, dtype=float).reshape(len(vs), k)
     done, rows, J, shots = M.march_rows(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, in_tg,
                                         pidx, np.asarray(values, dtype=float), np.asarray(vs, dtype=float),
-                                        hist, np.asarray(x0, dtype=float), J, tol, max_iter)
+                                        hist, np.asarray(x0, dtype=float), J, tol, max_iter, float(scale))
     memo["J"] = None if np.isnan(J[0, 0]) else J
     memo["shots"] = memo.get("shots", 0) + int(shots)
     return _states(vals.tolist(), unk.tolist(), rows[:done].tolist(), None if in_tg else pidx,

@@ -28,6 +28,7 @@ class Stage:
     residuals: tuple
     targets: dict
     param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
+    scale: float = 0.0  # the predictor's variable (``march.abscissa``): > 0 for delamination
     memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
 
     def solve(self, value: float, x0, tol: float = 1e-10) -> State:
@@ -52,7 +53,7 @@ class Stage:
         parameters ``vs`` and unknowns ``xs`` (``x0`` when there are none): the states solved before
         the first failure (including a state past vertical at the clamp, which ``solve`` reports)."""
         return solve_path(self.cfg, self.edge, self.fixed, self.unknowns, self.residuals, self.targets,
-                          self.param, values, vs, xs, x0, memo=self.memo, tol=tol)
+                          self.param, values, vs, xs, x0, memo=self.memo, tol=tol, scale=self.scale)
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""
@@ -96,8 +97,9 @@ def delamination(cfg: Config, control: str, slip: str, m: State, w: float, p=Non
     t = {**t, "w": w}
     fx = {**fx, "rho_a": m.rho_a}
     if slip == "frictionless":
-        return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
-    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
+        return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "rho_a", m.rho_a)
+    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "rho_a",
+                 m.rho_a)
 
 
 def branch_end(cfg: Config, control: str, m: State, w: float, p=None, d=None) -> Stage:
