@@ -327,8 +327,9 @@ def _assemble(c, mc, pin, dl, m, on, turn, fmin):
            [("delamination", s) for s in dl]
     turn_i = next(i for i, (_, s) in enumerate(rows) if s is turn)
     cols = {"stage": np.array([r[0] for r in rows])}
-    for k in ("a", "alpha", "p", "d", "f", "G"):
-        cols[k] = np.array([getattr(s, k) for _, s in rows], dtype=float)
+    vals = np.array([(s.a, s.alpha, s.p, s.d, s.f, s.G) for _, s in rows], dtype=float)
+    for j, k in enumerate(("a", "alpha", "p", "d", "f", "G")):
+        cols[k] = vals[:, j].copy()
     cols["G"][: len(mc)] = 0.0
     cols["delta"] = c.deltas([s for _, s in rows])
     cols["stable"] = np.arange(len(rows)) <= turn_i

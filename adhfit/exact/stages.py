@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
+from operator import attrgetter
 
 from ..errors import ConvergenceError
 from .solve import solve_path, solve_state
@@ -57,7 +59,13 @@ class Stage:
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""
-        return [getattr(st, k) for k in self.unknowns]
+        got = _getter(self.unknowns)(st)
+        return list(got) if len(self.unknowns) > 1 else [got]
+
+
+@lru_cache(maxsize=None)
+def _getter(names: tuple):
+    return attrgetter(*names)
 
 
 def _control(control: str, p: float | None, d: float | None):
