@@ -30,6 +30,17 @@ def test_free_inflation_matches_reference(p, lambda0):
     assert free_inflation(p, lambda0).d == pytest.approx(math.copysign(d0_ref, p), abs=1e-7)  # default n
 
 
+@pytest.mark.parametrize("n", [14, 128])
+def test_free_inflation_when_the_shot_at_lambda0_curls(n):
+    """A high pressure at a low pre-stretch (p = 0.676, lambda0 = 1.1: a fit's trial point): the shot
+    at lc = lambda0, the bracket's lower end, curls through the axis (r(beta) - 1 = +35 at n = 14, NaN
+    at 128), which used to read as 'no Case I state'; the state exists (theta at the clamp ~1.08)."""
+    d0_ref, lc_ref = ref.free_inflation(0.675792865403995, 1.1)
+    st = free_inflation(0.675792865403995, 1.1, n=n)
+    assert st.lc == pytest.approx(lc_ref, rel=1e-8)
+    assert st.d == pytest.approx(d0_ref, abs=1e-8)
+
+
 @pytest.mark.parametrize("guess", [1.68, 1.05, 10.0])  # near; far (secant fails: bracketing)
 def test_free_inflation_from_a_guess_against_reference(guess):
     """Continuation (compiled secant iterations from a guess, bracketing when they fail or land

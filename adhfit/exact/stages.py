@@ -30,7 +30,7 @@ class Stage:
     residuals: tuple
     targets: dict
     param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
-    scale: float = 0.0  # the predictor's variable (``march.abscissa``): > 0 for delamination
+    scale: float = 0.0  # the predictor's variable (``march.abscissa``): < 0 making contact, > 0 delamination
     memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
 
     def solve(self, value: float, x0, tol: float = 1e-10) -> State:
@@ -77,7 +77,7 @@ def _control(control: str, p: float | None, d: float | None):
 def making_contact(cfg: Config, control: str, p=None, d=None) -> Stage:
     """Adhesionless, frictionless contact, parameter the contact radius ``a``."""
     fx, u, r, t = _control(control, p, d)
-    return Stage(cfg, "continuous", fx, ("lc", "rho_a") + u, ("clamp", "a") + r, {**t, "a": 0.0}, "a")
+    return Stage(cfg, "continuous", fx, ("lc", "rho_a") + u, ("clamp", "a") + r, {**t, "a": 0.0}, "a", -1.0)
 
 
 def pinning(cfg: Config, control: str, slip: str, m: State, p=None, d=None) -> Stage:
