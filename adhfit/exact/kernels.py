@@ -81,7 +81,7 @@ def _rhs_contact(rho, r, l1, par):
     """Right-hand side of a contacting segment, y = (r, lambda1, u, v)."""
     s = -r * par
     c = math.sqrt(1.0 - s * s)
-    dl1, ir, t1, t2, e = _field(rho, r, l1, c)
+    dl1, _, _, _, e = _field(rho, r, l1, c)
     return l1 * c, dl1, e, math.pi * r * r * l1 * s
 
 
@@ -91,6 +91,14 @@ _AL = np.array([l for j in range(12) for l in range(j) if A[j, l] != 0.0], dtype
 _AV = np.array([A[j, l] for j in range(12) for l in range(j) if A[j, l] != 0.0])
 for _j in range(12):
     _AP[_j + 1] = _AP[_j] + sum(1 for _l in range(_j) if A[_j, _l] != 0.0)
+
+
+@jit
+def _stage_exps(kh, ec, ie):
+    """exp(kh C_j) and its reciprocal for the 12 stages (in place)."""
+    for j in range(12):
+        ec[j] = math.exp(kh * C[j])
+        ie[j] = 1.0 / ec[j]
 
 
 @jit
@@ -114,9 +122,7 @@ def _steps(kind, y, rho1, eps, K, mu, par):
     yt = np.empty(m)
     ec = np.empty(12)
     ie = np.empty(12)
-    for j in range(12):
-        ec[j] = math.exp(K * C[j] * h)
-        ie[j] = 1.0 / ec[j]
+    _stage_exps(K * h, ec, ie)
     g, ig = math.exp(K * h), math.exp(-K * h)
     e0, ie0 = 1.0, 1.0
     he, hk = 0.5 * eps, 0.5 * eps * K
@@ -125,9 +131,7 @@ def _steps(kind, y, rho1, eps, K, mu, par):
             h = rem
             e0 = math.exp(K * nf * hf)
             ie0 = 1.0 / e0
-            for j in range(12):
-                ec[j] = math.exp(K * C[j] * h)
-                ie[j] = 1.0 / ec[j]
+            _stage_exps(K * h, ec, ie)
         for j in range(12):
             for q in range(mo):
                 yt[q] = y[q]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cache
 from operator import attrgetter
 
 from ..errors import ConvergenceError
@@ -63,7 +63,7 @@ class Stage:
         return list(got) if len(self.unknowns) > 1 else [got]
 
 
-@lru_cache(maxsize=None)
+@cache
 def _getter(names: tuple):
     return attrgetter(*names)
 
