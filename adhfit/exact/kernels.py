@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from .dop853 import A, B, C
-from .jit import jit
+from .jit import fast_jit, jit
 
 FREE = 0
 CONTACT = 1
@@ -44,7 +44,7 @@ def _dt1(l1, l2):
     return d1, d2
 
 
-@jit
+@fast_jit
 def _field(rho, r, l1, c):
     """(d lambda1/d rho, 1/r, T1, T2, stored-energy density pi (I1 - 3) rho) at one point.
 
@@ -68,7 +68,7 @@ def _field(rho, r, l1, c):
     return (t1p - d2 * l2p) / d1, ir, t1, t2, e
 
 
-@jit
+@fast_jit
 def _rhs_free(rho, r, c, s, l1, par):
     """Right-hand side of a free segment, y = (r, cos theta, sin theta, lambda1, z, u, v)."""
     dl1, ir, t1, t2, e = _field(rho, r, l1, c)
@@ -76,7 +76,7 @@ def _rhs_free(rho, r, c, s, l1, par):
     return l1 * c, -s * k, c * k, dl1, l1 * s, e, math.pi * r * r * l1 * s
 
 
-@jit
+@fast_jit
 def _rhs_contact(rho, r, l1, par):
     """Right-hand side of a contacting segment, y = (r, lambda1, u, v)."""
     s = -r * par
@@ -101,7 +101,7 @@ def _stage_exps(kh, ec, ie):
         ie[j] = 1.0 / ec[j]
 
 
-@jit
+@fast_jit
 def _steps(kind, y, rho1, eps, K, mu, par):
     """mu (>= 1, real) steps of DOP853's 8th-order solution in s on [0, 1], rho = rho1 + eps sinh(K s);
     y in place: floor(mu) steps of 1/mu and a last partial one, so that the result is continuous in
