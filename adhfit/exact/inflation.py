@@ -14,7 +14,8 @@ from .state import DEFAULT_N, Config, State, evaluate
 
 __all__ = ["free_inflation", "apex_deflection", "free_curve"]
 
-D0_NODES = 24  # apex stretches of free_curve (d0 to ~3e-11 when p changes sign, ~1e-13 otherwise)
+D0_NODES = 20  # apex stretches of free_curve (d0 to ~5e-12 when p changes sign, ~3e-14 otherwise; 16
+# nodes left 8e-10 through p = 0 at lambda0 = 1.1, over the accepted 1e-10 of control.D0_CHECK)
 
 
 def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None,
