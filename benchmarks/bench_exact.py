@@ -9,15 +9,18 @@ error of the A2 summary (f_max, onset / f_min / turning_point: f, delta, p, a) a
   solution of tests/exact_reference.py to ~1e-12 on single states), and
 - the independent reference itself for the end-of-loading state (a, d, f at the engine's rho_a).
 
-With ``--baseline REV`` it also times the engine of git revision REV against this one in the same run
+With ``--baseline REV [REV ...]`` it also times the engine of each git revision REV against this one in the same run
 (both in fresh subprocesses, alternating, on the four cases at lambda0 = 1.5 and the default n): median
 wall and CPU (process_time) per history, the ratio before/after, and each engine's summary error
 against this engine at n = 128 and (displacement control) its end-of-loading state against the
 independent reference.
 
+It also lists, for lambda0 = 1.1, 1.2, 1.5, 2 and 3, the largest error of the summary of a default-n
+history against n = 128 (and which value it is in).
+
 Usage::
 
-    python benchmarks/bench_exact.py [--repeat 5] [--baseline REV]
+    python benchmarks/bench_exact.py [--repeat 5] [--baseline REV [REV ...]]
 
 Writes ``benchmarks/results/exact.md`` and ``exact.json``.  The machine is shared (2 cores): times are
 medians (and minima) of ``--repeat`` calls after a warm-up; load averages are recorded.
@@ -39,12 +42,14 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from adhfit.exact.history import exact_history  # noqa: E402
+from adhfit.exact.state import DEFAULT_N  # noqa: E402
 from tests import exact_reference as ref  # noqa: E402
 
 LAMBDA0 = 1.2
 CASES = [("displacement", "frictionless", {"p": 0.6}), ("displacement", "no-slip", {"p": 0.6}),
          ("pressure", "frictionless", {"d": 0.2}), ("pressure", "no-slip", {"d": 0.2})]
-STEPS = (12, 16, 20, 24, 32)
+STEPS = (8, 10, 12, 16, 20)
+LAMBDAS = (1.1, 1.2, 1.5, 2.0, 3.0)  # the default n's summary error against n = 128 (all four cases)
 
 
 def _run(control, slip, kw, n):
@@ -133,6 +138,31 @@ def compare(rev, repeat, rounds=2):
     return out
 
 
+def default_errors():
+    """Max abs error of the A2 summary of a default-n history against n = 128, per lambda0 and case."""
+    out = []
+    def run(control, slip, kw, lam, n):
+        return _flat(exact_history(control, slip, w=0.2, rs=0.5, a_max=0.25, lambda0=lam, points=200, n=n,
+                                   **kw).summary)
+    for lam in LAMBDAS:
+        for control, slip, kw in CASES:
+            best, got = run(control, slip, kw, lam, 128), run(control, slip, kw, lam, DEFAULT_N)
+            key = max(best, key=lambda q: abs(got[q] - best[q]))
+            out.append({"lambda0": lam, "control": control, "slip": slip, "max_abs_err": abs(got[key] - best[key]),
+                        "worst": key})
+    return out
+
+
+def _lambda_lines(rows):
+    lines = ["", f"## Default n = {DEFAULT_N} against n = 128 over lambda0 (same base cases)", "",
+             ("Max abs error over the A2 summary values (f_max; onset, f_min, turning point: f, delta, p, a) "
+              "and the value it occurs in."), "", "| lambda0 | control | slip | max abs err | worst value |",
+             "|---:|---|---|---:|---|"]
+    for r in rows:
+        lines.append(f"| {r['lambda0']:g} | {r['control']} | {r['slip']} | {r['max_abs_err']:.1e} | {r['worst']} |")
+    return lines
+
+
 def _compare_lines(rev, cmp):
     lines = ["", f"## Before/after in the same run (lambda0 = 1.5, n = default, 200 rows; before = {rev})", "",
              "Each engine in fresh subprocesses, alternating (2 rounds x --repeat histories after a warm-up); "
@@ -158,10 +188,11 @@ def _compare_lines(rev, cmp):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--baseline", default=None, help="git revision to time against (same run)")
+    ap.add_argument("--baseline", nargs="*", default=[], help="git revisions to time against (same run)")
     args = ap.parse_args()
     load0 = os.getloadavg()
-    cmp = compare(args.baseline, args.repeat) if args.baseline else None
+    cmp = {rev: compare(rev, args.repeat) for rev in args.baseline}
+    lam_rows = default_errors()
     rows = []
     for control, slip, kw in CASES:
         best = _run(control, slip, kw, 128)
@@ -184,17 +215,18 @@ def main() -> None:
                             text=True).stdout.strip()
     cmd = "python benchmarks/bench_exact.py --repeat %d" % args.repeat
     if args.baseline:
-        cmd += " --baseline " + args.baseline
+        cmd += " --baseline " + " ".join(args.baseline)
     meta = {"command": cmd, "commit": commit,
             "python": platform.python_version(), "nproc": os.cpu_count(), "load_start": load0,
             "load_end": os.getloadavg(), "lambda0": LAMBDA0}
     out = ROOT / "benchmarks" / "results"
-    (out / "exact.json").write_text(json.dumps({"meta": meta, "rows": rows, "compare": cmp}, indent=1))
+    (out / "exact.json").write_text(json.dumps({"meta": meta, "rows": rows, "compare": cmp,
+                                                "default_n_errors": lam_rows}, indent=1))
     lines = ["# Exact membrane: run time against error (200-row histories, lambda0 = 1.2)", "",
              f"Command: `{meta['command']}` at {commit}; python {meta['python']}, nproc {meta['nproc']}, "
              f"load average at start {load0[0]:.2f}, at end {meta['load_end'][0]:.2f}.", "",
              "Base case p = 0.6 (displacement) or d = 0.2 (pressure), w = 0.2, rs = 0.5, a_max = 0.25. "
-             "n = fixed 8th-order Runge-Kutta steps per membrane segment (default 20). Error: max abs "
+             f"n = fixed 8th-order Runge-Kutta steps per membrane segment (default {DEFAULT_N}). Error: max abs "
              "over the A2 summary values against n = 128; the last column checks the end-of-loading "
              "state (a, d, f) of the n = 128 run against the independent adaptive reference. "
              "The wall times are inflated by the shared machine's load; the least CPU time "
@@ -206,8 +238,9 @@ def main() -> None:
         lines.append(f"| {r['control']} | {r['slip']} | {r['n']} | {r['median_ms']:.0f} | {r['median_cpu_ms']:.1f} | "
                      f"{r['min_cpu_ms']:.1f} | "
                      f"{r['max_abs_err_vs_n128']:.1e} | {ref_s} |")
-    if cmp:
-        lines += _compare_lines(args.baseline, cmp)
+    lines += _lambda_lines(lam_rows)
+    for rev, c in cmp.items():
+        lines += _compare_lines(rev, c)
     (out / "exact.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

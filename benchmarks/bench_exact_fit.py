@@ -70,7 +70,7 @@ def replicates(n: int) -> list[str]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="0.5 % noise only")
+    ap.add_argument("--quick", action="store_true", help="0.5 %% noise only")
     ap.add_argument("--replicates", type=int, default=0, help="N noise draws per case instead (see above)")
     args = ap.parse_args()
     if args.replicates:

@@ -203,4 +203,4 @@ def _free_at_gap(d, lambda0, n) -> State:
         if hi > 20:
             raise InputError("d", d, "a gap reachable by free inflation in Case I")
     q = brentq(resid, 0.0, hi, xtol=1e-15, rtol=1e-15)
-    return free_inflation(sgn * q, lambda0, n)
+    return free_inflation(sgn * q, lambda0, n, memo.get("lc"), memo)  # from the last root iterate

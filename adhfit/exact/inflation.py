@@ -14,7 +14,8 @@ from .state import DEFAULT_N, Config, State, evaluate
 
 __all__ = ["free_inflation", "apex_deflection", "free_curve"]
 
-D0_NODES = 24  # apex stretches of free_curve (d0 to ~3e-11 when p changes sign, ~1e-13 otherwise)
+D0_NODES = 20  # apex stretches of free_curve (d0 to ~5e-12 when p changes sign, ~3e-14 otherwise; 16
+# nodes left 8e-10 through p = 0 at lambda0 = 1.1, over the accepted 1e-10 of control.D0_CHECK)
 
 
 def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None,
@@ -77,9 +78,19 @@ def apex_deflection(p: float, lambda0: float, n: int = DEFAULT_N) -> float:
 
 
 def _bracketed(resid, lambda0, p):
-    lo, hi = lambda0, lambda0 * 1.05
+    lo = lambda0
     if not resid(lo) < 0.0:
-        raise ConvergenceError("exact free inflation: no Case I state", {"p": p, "lambda0": lambda0})
+        # under a high pressure the shot at lc = lambda0 can curl through the axis (a non-finite or
+        # meaningless r(beta): at p = 0.676, lambda0 = 1.1 it gave +35 at n = 14, NaN at 128): the
+        # lower end is then the first of a few stretches above lambda0 with r(beta) < 1
+        for lc in lambda0 * (1.0 + 0.01 * np.arange(1, 6)):
+            r = resid(lc)
+            if math.isfinite(r) and r < 0.0:
+                lo = lc
+                break
+        else:
+            raise ConvergenceError("exact free inflation: no Case I state", {"p": p, "lambda0": lambda0})
+    hi = lo * 1.05
     while not resid(hi) >= 0.0:
         lo, hi = hi, hi * 1.2
         if hi > 1e3 * lambda0:

@@ -17,13 +17,17 @@ import math
 import numpy as np
 
 from .dop853 import A, B, C
-from .jit import jit
+from .jit import fast_jit, jit
 
 FREE = 0
 CONTACT = 1
 START = 3e-3  # apex series start, as a fraction of the segment end (series error ~1e-11; 1e-3 needs
 # 20 % more steps for the same accuracy, 1e-2 leaves a floor of ~5e-10)
 K_APEX = math.asinh(1.0 / START - 1.0)  # e-folds of the graded mesh of a segment from the apex
+FREE_APEX = 2  # a free segment from the apex (free inflation) takes this many times n steps: its last
+# steps reach the clamp, where the membrane curves most (at n steps it set the error of a history at
+# lambda0 <= 1.2: 2e-8 at n = 14, the contact states 5e-10); so does a free segment from a small
+# contact edge, per e-fold of its mesh (``free_from_edge``)
 
 
 @jit
@@ -40,12 +44,12 @@ def _dt1(l1, l2):
     return d1, d2
 
 
-@jit
+@fast_jit
 def _field(rho, r, l1, c):
     """(d lambda1/d rho, 1/r, T1, T2, stored-energy density pi (I1 - 3) rho) at one point.
 
     d lambda1/d rho follows from d(T1 r)/d rho = T2 dr/d rho (tangential equilibrium, eq. 4); the
-    reciprocals are shared so that one evaluation costs five divisions.
+    reciprocals are shared so that one evaluation costs four divisions.
     """
     irho = 1.0 / rho
     ir = 1.0 / r
@@ -60,32 +64,25 @@ def _field(rho, r, l1, c):
     d2 = -l1 * il2 * il2 + 3.0 * j * il2
     l2p = (l1 * c - l2) * irho
     t1p = (t2 - t1) * l1 * c * ir
-    e = math.pi * (l1 * l1 + l2 * l2 + j / q - 3.0) * rho
+    e = math.pi * (l1 * l1 + l2 * l2 + q * q - 3.0) * rho
     return (t1p - d2 * l2p) / d1, ir, t1, t2, e
 
 
-@jit
-def _rhs(kind, rho, y, par, out):
-    if kind == FREE:  # y = (r, z, cos theta, sin theta, lambda1, u, v): no sin/cos per evaluation
-        r, c, s, l1 = y[0], y[2], y[3], y[4]
-        dl1, ir, t1, t2, e = _field(rho, r, l1, c)
-        k = l1 * (2.0 * par - t2 * s * ir) / t1
-        out[0] = l1 * c
-        out[1] = l1 * s
-        out[2] = -s * k
-        out[3] = c * k
-        out[4] = dl1
-        out[5] = e
-        out[6] = math.pi * r * r * l1 * s
-    else:
-        r, l1 = y[0], y[1]
-        s = -r * par
-        c = math.sqrt(1.0 - s * s)
-        dl1, ir, t1, t2, e = _field(rho, r, l1, c)
-        out[0] = l1 * c
-        out[1] = dl1
-        out[2] = e
-        out[3] = math.pi * r * r * l1 * s
+@fast_jit
+def _rhs_free(rho, r, c, s, l1, par):
+    """Right-hand side of a free segment, y = (r, cos theta, sin theta, lambda1, z, u, v)."""
+    dl1, ir, t1, t2, e = _field(rho, r, l1, c)
+    k = l1 * (2.0 * par - t2 * s * ir) / t1
+    return l1 * c, -s * k, c * k, dl1, l1 * s, e, math.pi * r * r * l1 * s
+
+
+@fast_jit
+def _rhs_contact(rho, r, l1, par):
+    """Right-hand side of a contacting segment, y = (r, lambda1, u, v)."""
+    s = -r * par
+    c = math.sqrt(1.0 - s * s)
+    dl1, _, _, _, e = _field(rho, r, l1, c)
+    return l1 * c, dl1, e, math.pi * r * r * l1 * s
 
 
 # the nonzero Runge-Kutta matrix entries, row by row (50 of 66): row j uses _AV[_AP[j]:_AP[j + 1]]
@@ -97,42 +94,79 @@ for _j in range(12):
 
 
 @jit
-def _steps(kind, y, rho1, eps, K, n, par, m):
-    """n steps of DOP853's 8th-order solution in s on [0, 1], rho = rho1 + eps sinh(K s); y in place."""
-    h = 1.0 / n
+def _stage_exps(kh, ec, ie):
+    """exp(kh C_j) and its reciprocal for the 12 stages (in place)."""
+    for j in range(12):
+        ec[j] = math.exp(kh * C[j])
+        ie[j] = 1.0 / ec[j]
+
+
+@fast_jit
+def _steps(kind, y, rho1, eps, K, mu, par):
+    """mu (>= 1, real) steps of DOP853's 8th-order solution in s on [0, 1], rho = rho1 + eps sinh(K s);
+    y in place: floor(mu) steps of 1/mu and a last partial one, so that the result is continuous in
+    mu (a step count that jumps with a state's data would make the discretization error jump).
+
+    Only the first ``mo`` components of y enter the right-hand side; the others are quadratures, whose
+    stage values are never needed (the same result, fewer operations). The mesh's exp(K s) at the
+    stages comes from exp(K s0) exp(K C_j h), the former by a recurrence (reset every 8 steps).
+    """
+    m = y.shape[0]
+    mo = 4 if kind == FREE else 2
+    hf = 1.0 / mu
+    nf = int(mu)
+    rem = 1.0 - nf * hf
+    total = nf + 1 if rem > 1e-9 * hf else nf
+    h = hf
     k = np.empty((12, m))
     yt = np.empty(m)
-    f = np.empty(m)
-    sc = np.empty(12)
-    cc = np.empty(12)
-    for j in range(12):  # sinh/cosh of K (s0 + C_j h) by the addition theorems
-        sc[j] = math.sinh(K * C[j] * h)
-        cc[j] = math.cosh(K * C[j] * h)
-    for i in range(n):
-        s0, c0 = math.sinh(K * i * h), math.cosh(K * i * h)
+    ec = np.empty(12)
+    ie = np.empty(12)
+    _stage_exps(K * h, ec, ie)
+    g, ig = math.exp(K * h), math.exp(-K * h)
+    e0, ie0 = 1.0, 1.0
+    he, hk = 0.5 * eps, 0.5 * eps * K
+    for i in range(total):
+        if i == nf:  # the partial last step
+            h = rem
+            e0 = math.exp(K * nf * hf)
+            ie0 = 1.0 / e0
+            _stage_exps(K * h, ec, ie)
         for j in range(12):
-            for q in range(m):
+            for q in range(mo):
                 yt[q] = y[q]
             for t in range(_AP[j], _AP[j + 1]):
                 a = h * _AV[t]
                 l = _AL[t]
-                for q in range(m):
+                for q in range(mo):
                     yt[q] += a * k[l, q]
-            rho = rho1 + eps * (s0 * cc[j] + c0 * sc[j])
-            jac = eps * K * (c0 * cc[j] + s0 * sc[j])
-            _rhs(kind, rho, yt, par, f)
-            for q in range(m):
-                k[j, q] = f[q] * jac
+            ep, em = e0 * ec[j], ie0 * ie[j]
+            rho = rho1 + he * (ep - em)
+            jac = hk * (ep + em)
+            if kind == FREE:
+                f = _rhs_free(rho, yt[0], yt[1], yt[2], yt[3], par)
+                k[j, 0], k[j, 1], k[j, 2], k[j, 3] = f[0] * jac, f[1] * jac, f[2] * jac, f[3] * jac
+                k[j, 4], k[j, 5], k[j, 6] = f[4] * jac, f[5] * jac, f[6] * jac
+            else:
+                f = _rhs_contact(rho, yt[0], yt[1], par)
+                k[j, 0], k[j, 1], k[j, 2], k[j, 3] = f[0] * jac, f[1] * jac, f[2] * jac, f[3] * jac
         for q in range(m):
             acc = 0.0
             for j in range(12):
                 acc += B[j] * k[j, q]
             y[q] += h * acc
+        if i % 8 == 7:
+            e0 = math.exp(K * (i + 1) * hf)
+            ie0 = 1.0 / e0
+        else:
+            e0 *= g
+            ie0 *= ig
 
 
 @jit
 def integrate(kind, y0, rho1, rho2, eps, n, par, A, B, C):
-    """Integrate from rho1 to rho2 in n fixed steps of s on the graded mesh rho = rho1 + eps sinh(K s).
+    """Integrate from rho1 to rho2 in n (real, >= 1: see ``_steps``) fixed steps of s on the graded mesh
+    rho = rho1 + eps sinh(K s).
 
     eps sets the grading (steps ~ eps near rho1, geometric growth beyond); K = asinh((rho2-rho1)/eps).
     (A, B, C: the Dormand-Prince tableau, kept in the signature; the module's own copy is used.)
@@ -142,11 +176,11 @@ def integrate(kind, y0, rho1, rho2, eps, n, par, A, B, C):
         return y
     K = math.asinh((rho2 - rho1) / eps)
     if kind == FREE:  # the angle as its cosine and sine while integrating
-        w = np.array([y[0], y[1], math.cos(y[2]), math.sin(y[2]), y[3], y[4], y[5]])
-        _steps(FREE, w, rho1, eps, K, n, par, 7)
-        y[0], y[1], y[2], y[3], y[4], y[5] = w[0], w[1], math.atan2(w[3], w[2]), w[4], w[5], w[6]
+        w = np.array([y[0], math.cos(y[2]), math.sin(y[2]), y[3], y[1], y[4], y[5]])
+        _steps(FREE, w, rho1, eps, K, float(n), par)
+        y[0], y[1], y[2], y[3], y[4], y[5] = w[0], w[4], math.atan2(w[2], w[1]), w[3], w[5], w[6]
     else:
-        _steps(CONTACT, y, rho1, eps, K, n, par, 4)
+        _steps(CONTACT, y, rho1, eps, K, float(n), par)
     return y
 
 
@@ -174,7 +208,7 @@ def from_apex(kind, lc, rho_end, n, par, A, B, C):
     """Integrate a segment that starts at the apex (rho = 0) with centre stretch lc."""
     rs0 = START * rho_end
     y0 = _apex(kind, lc, rs0, par)
-    return integrate(kind, y0, rs0, rho_end, rs0, n, par, A, B, C)
+    return integrate(kind, y0, rs0, rho_end, rs0, n if kind == CONTACT else FREE_APEX * n, par, A, B, C)
 
 
 @jit
@@ -182,13 +216,17 @@ def free_from_edge(y0, rho_a, beta, n, p, A, B, C):
     """Integrate the free membrane from the contact edge rho_a to the clamp beta.
 
     The mesh is graded towards the edge (steps ~ rho_a there); a small contact is near the apex, whose
-    1/rho terms the grading resolves geometrically, so the steps grow with the number of e-folds,
-    asinh((beta - rho_a)/rho_a), beyond those of an apex segment (``K_APEX``): n at rho_a >~ 2e-3 beta.
+    1/rho terms the grading resolves geometrically, so the steps grow with the number of e-folds K =
+    asinh((beta - rho_a)/rho_a): FREE_APEX n per ``K_APEX`` e-folds (a free segment from a small edge
+    resembles one from the apex), at least n (rho_a >~ 0.08 beta). The count is real (``_steps``): a
+    count rounded up jumped by a step at some rho_a, the discretization error with it, and such a jump
+    inside the stencil of an extremum's refinement (``history._extremum``) moved the extremum (by
+    1.5e-7 in a at n = 12, where a turning point lay).
     """
     eps = min(rho_a, beta - rho_a)
     if eps <= 0.0:
         return y0.copy()
-    m = max(n, math.ceil(n * math.asinh((beta - rho_a) / eps) / K_APEX))
+    m = max(float(n), FREE_APEX * n * math.asinh((beta - rho_a) / eps) / K_APEX)
     return integrate(FREE, y0, rho_a, beta, eps, m, p, A, B, C)
 
 
@@ -260,3 +298,4 @@ def shot_from_edge(edge, p, crv, beta, n, yc, rho_a, alpha, l1p, A, B, C):
     out[6], out[7], out[8] = l1m, l1p, l2
     out[9], out[10] = y[4], y[5]
     return out
+

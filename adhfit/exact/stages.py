@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cache
+from operator import attrgetter
 
 from ..errors import ConvergenceError
 from .solve import solve_path, solve_state
@@ -28,6 +30,7 @@ class Stage:
     residuals: tuple
     targets: dict
     param: str  # the continuation parameter: a key of ``fixed`` or of ``targets``
+    scale: float = 0.0  # the predictor's variable (``march.abscissa``): < 0 making contact, > 0 delamination
     memo: dict = field(default_factory=dict, compare=False, repr=False)  # Jacobian reused along the path
 
     def solve(self, value: float, x0, tol: float = 1e-10) -> State:
@@ -52,11 +55,17 @@ class Stage:
         parameters ``vs`` and unknowns ``xs`` (``x0`` when there are none): the states solved before
         the first failure (including a state past vertical at the clamp, which ``solve`` reports)."""
         return solve_path(self.cfg, self.edge, self.fixed, self.unknowns, self.residuals, self.targets,
-                          self.param, values, vs, xs, x0, memo=self.memo, tol=tol)
+                          self.param, values, vs, xs, x0, memo=self.memo, tol=tol, scale=self.scale)
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""
-        return [getattr(st, k) for k in self.unknowns]
+        got = _getter(self.unknowns)(st)
+        return list(got) if len(self.unknowns) > 1 else [got]
+
+
+@cache
+def _getter(names: tuple):
+    return attrgetter(*names)
 
 
 def _control(control: str, p: float | None, d: float | None):
@@ -68,7 +77,7 @@ def _control(control: str, p: float | None, d: float | None):
 def making_contact(cfg: Config, control: str, p=None, d=None) -> Stage:
     """Adhesionless, frictionless contact, parameter the contact radius ``a``."""
     fx, u, r, t = _control(control, p, d)
-    return Stage(cfg, "continuous", fx, ("lc", "rho_a") + u, ("clamp", "a") + r, {**t, "a": 0.0}, "a")
+    return Stage(cfg, "continuous", fx, ("lc", "rho_a") + u, ("clamp", "a") + r, {**t, "a": 0.0}, "a", -1.0)
 
 
 def pinning(cfg: Config, control: str, slip: str, m: State, p=None, d=None) -> Stage:
@@ -96,8 +105,9 @@ def delamination(cfg: Config, control: str, slip: str, m: State, w: float, p=Non
     t = {**t, "w": w}
     fx = {**fx, "rho_a": m.rho_a}
     if slip == "frictionless":
-        return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
-    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "rho_a")
+        return Stage(cfg, "frictionless", fx, ("lc", "alpha") + u, ("clamp", "G") + r, t, "rho_a", m.rho_a)
+    return Stage(cfg, "given", {**fx, "lc": m.lc}, ("l1p", "alpha") + u, ("clamp", "G") + r, t, "rho_a",
+                 m.rho_a)
 
 
 def branch_end(cfg: Config, control: str, m: State, w: float, p=None, d=None) -> Stage:

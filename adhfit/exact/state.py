@@ -19,7 +19,8 @@ from . import kernels as K
 
 __all__ = ["Config", "State", "evaluate", "release_rate", "DEFAULT_N"]
 
-DEFAULT_N = 20  # steps per segment: ~1e-9 on the summary against n = 128 (benchmarks/results/exact.md)
+DEFAULT_N = 14  # steps per segment: <~3e-9 on the summary against n = 128, states <~5e-9 against the
+# adaptive reference (benchmarks/results/exact.md; 12 left ~1e-8 on states at lambda0 = 1.5 under pressure)
 
 
 @dataclass(frozen=True)
