@@ -10,19 +10,29 @@ import pytest
 from adhfit import simulate
 from adhfit.exact.history import exact_history
 from adhfit.exact.stages import delamination, pinning
-from adhfit.exact.state import Config
+from adhfit.exact.state import DEFAULT_N, Config
 from tests import exact_reference as ref
 
 BASE = dict(p=0.6, w=0.2, rs=0.5, a_max=0.25)
+# The default n is checked against the independent reference at issue 11's 1e-6 with the 5x margin it
+# was chosen for (benchmarks/results/exact_n.md); TIGHT_N steps at 1e-8 (convergence to the reference).
+ISSUE_TOL, TIGHT_N, TIGHT_TOL = 2e-7, 14, 1e-8
+STEPS = sorted({DEFAULT_N, TIGHT_N})
 
 
-@pytest.fixture(scope="module", params=["frictionless", "no-slip"])
+def _tol(n):
+    return TIGHT_TOL if n >= TIGHT_N else ISSUE_TOL
+
+
+@pytest.fixture(scope="module", params=[(s, n) for s in ("frictionless", "no-slip") for n in STEPS],
+                ids=lambda q: f"{q[0]}-n{q[1]}")
 def hist(request):
-    return request.param, exact_history("displacement", request.param, lambda0=1.2, points=40, **BASE)
+    slip, n = request.param
+    return slip, n, exact_history("displacement", slip, lambda0=1.2, points=40, n=n, **BASE)
 
 
 def test_columns_and_flags(hist):
-    slip, h = hist
+    slip, _, h = hist
     c = h.columns
     assert list(c["stage"][:1]) == ["making_contact"] and c["stage"][-1] == "delamination"
     for k in ("a", "alpha", "d", "delta", "f", "G"):
@@ -38,7 +48,7 @@ def test_columns_and_flags(hist):
 
 def test_states_against_reference(hist):
     """Every stage's states, re-shot by the independent solver from the same edge data."""
-    slip, h = hist
+    slip, n, h = hist
     m = [s for s, st in zip(h.states, h.columns["stage"]) if st == "making_contact"][-1]
     picks = [i for i in (len(h.states) // 3, len(h.states) // 2, -3)]
     for i in picks:
@@ -46,9 +56,8 @@ def test_states_against_reference(hist):
         edge = "frictionless" if slip == "frictionless" else "given"
         lc = s.lc if slip == "frictionless" else m.lc
         r_end, d, f, G = ref.edge_state(0.6, 1.2, 0.5, lc, s.rho_a, s.alpha, edge, s.l1p)
-        # the default 14 steps per segment give <~5e-9 (issue target: 1e-6)
-        assert r_end == pytest.approx(1.0, abs=1e-8)
-        assert (d, f, G) == pytest.approx((s.d, s.f, s.G), abs=1e-8)
+        assert r_end == pytest.approx(1.0, abs=_tol(n))
+        assert (d, f, G) == pytest.approx((s.d, s.f, s.G), abs=_tol(n))
 
 
 @pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
@@ -159,19 +168,20 @@ def test_weak_adhesion_no_slip_branch_ends_where_large_stretch_does():
     assert ex.inputs["delamination_ends_at_a"] == pytest.approx(ls.inputs["delamination_ends_at_a"], abs=1e-5)
 
 
+@pytest.mark.parametrize("n", STEPS)
 @pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
-def test_pressure_control_states_against_reference(slip):
+def test_pressure_control_states_against_reference(slip, n):
     """Pressure control, lambda0 = 1.5: states re-shot by the independent solver at their own p."""
-    h = exact_history("pressure", slip, d=0.2, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5, points=30)
+    h = exact_history("pressure", slip, d=0.2, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5, points=30, n=n)
     m = [s for s, st in zip(h.states, h.columns["stage"]) if st == "making_contact"][-1]
     for i in (len(h.states) // 2, -5):
         s = h.states[i]
         edge = "frictionless" if slip == "frictionless" else "given"
         lc = s.lc if slip == "frictionless" else m.lc
         r_end, d, f, G = ref.edge_state(s.p, 1.5, 0.5, lc, s.rho_a, s.alpha, edge, s.l1p)
-        assert r_end == pytest.approx(1.0, abs=1e-8)
-        assert d == pytest.approx(0.2, abs=1e-8)
-        assert (f, G) == pytest.approx((s.f, 0.2), abs=1e-8)
+        assert r_end == pytest.approx(1.0, abs=_tol(n))
+        assert d == pytest.approx(0.2, abs=_tol(n))
+        assert (f, G) == pytest.approx((s.f, 0.2), abs=_tol(n))
 
 
 def test_strong_adhesion_and_domain_limits():
@@ -215,16 +225,17 @@ def test_rows_and_extrema_are_solved_states(control, slip, kw):
             assert h.columns["delta"][i] == pytest.approx(free_inflation(s.p, lam0).d - s.d, abs=1e-10)
 
 
-def test_onset_when_g_rises_slowly_along_pinning():
+@pytest.mark.parametrize("n", STEPS)
+def test_onset_when_g_rises_slowly_along_pinning(n):
     """No slip, pressure control, lambda0 = 1.1, w = 1: G climbs to w only near alpha ~ 1.5 and the
     pinning branch continues past it onto states with G ~ 0.06 (a long alpha step can land there).
     The onset must be the first G = w: G rises along the pinning rows, and the onset state re-shot by
     the independent solver closes at the clamp with G = w and the row's gap."""
-    h = exact_history("pressure", "no-slip", d=-0.05, w=1.0, rs=0.5, a_max=0.25, lambda0=1.1, points=30)
+    h = exact_history("pressure", "no-slip", d=-0.05, w=1.0, rs=0.5, a_max=0.25, lambda0=1.1, points=30, n=n)
     stg = h.columns["stage"]
     g = h.columns["G"][stg == "pinning"]
     assert np.all(np.diff(g) > 0) and g[-1] == pytest.approx(1.0, abs=1e-10)
     m = [s for s, st in zip(h.states, stg) if st == "making_contact"][-1]
     on = [s for s, st in zip(h.states, stg) if st == "pinning"][-1]
     r_end, d, f, G = ref.edge_state(on.p, 1.1, 0.5, m.lc, on.rho_a, on.alpha, "given", on.l1p)
-    assert (r_end, d, f, G) == pytest.approx((1.0, -0.05, on.f, 1.0), abs=1e-8)
+    assert (r_end, d, f, G) == pytest.approx((1.0, -0.05, on.f, 1.0), abs=_tol(n))

@@ -129,3 +129,19 @@ def test_free_curve_matches_direct_solves(lambda0, lo, hi):
     direct = np.array([free_inflation(q, lambda0).d for q in p])
     # 1e-10: the accepted difference (adhfit.exact.control.D0_CHECK); ~5e-12 through p = 0, 3e-14 otherwise
     assert np.max(np.abs(d0 - direct)) < 1e-10
+
+
+@pytest.mark.parametrize("d, lambda0", [(0.2, 1.1), (0.2, 1.5), (-0.05, 1.1), (0.4, 3.0), (0.01, 1.2)])
+def test_free_state_at_a_gap(d, lambda0):
+    """Pressure control starts at the free state with apex deflection d: Newton on (lc, p) from the
+    large-stretch cap agrees with the root search in p (free inflation at each p), and at n = 64 its
+    pressure inflates the independent reference to the same apex deflection."""
+    from adhfit.exact.control import _free_at_gap, _gap_bracketed, _gap_newton
+    st = _gap_newton(d, lambda0, 14)
+    assert st is not None
+    old = _gap_bracketed(d, lambda0, 14)
+    assert (st.p, st.lc, st.d) == pytest.approx((old.p, old.lc, d), abs=1e-11)
+    st = _free_at_gap(d, lambda0, 64)
+    d0_ref, lc_ref = ref.free_inflation(abs(st.p), lambda0)
+    assert math.copysign(d0_ref, d) == pytest.approx(d, abs=1e-9)
+    assert st.lc == pytest.approx(lc_ref, rel=1e-9)

@@ -9,7 +9,8 @@ from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
 from .inflation import free_curve, free_inflation
-from .state import State
+from .solve import solve_state
+from .state import Config, State
 
 __all__ = ["Control", "prepare"]
 
@@ -144,12 +145,7 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
         _check("p", p, -1.0, 1.0, "a float in (-1, 1) under displacement control")
         if p <= -(0.0 if math.isinf(rs) else 1.0 / rs):
             raise InputError("p", p, "a float > -1/rs (the membrane must be pressed onto the substrate)")
-        try:
-            free = free_inflation(p, lambda0, n)
-        except ConvergenceError as exc:
-            raise InputError("p", p, f"a pressure with a Case I free inflation at lambda0 = {lambda0}",
-                             "The exact membrane would turn past vertical at the clamp (Case II is not "
-                             "modelled): lower |p| or raise lambda0.") from exc
+        free = _free_at_p(p, lambda0, n)
     else:
         _check("d", d, -1.0, 1.0, "a float in (-1, 1) under pressure control")
         free = _free_at_gap(d, lambda0, n)
@@ -180,10 +176,56 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
     return c
 
 
+def _free_at_p(p, lambda0, n) -> State:
+    """Displacement control starts from free inflation at p (Newton from the large-stretch cap)."""
+    try:
+        lc0 = cap_stretch(abs(p) / (1.0 + math.sqrt(1.0 - p * p)), lambda0)  # eq. 15's d0 (its cap)
+        return free_inflation(p, lambda0, n, lc0)
+    except ConvergenceError as exc:
+        raise InputError("p", p, f"a pressure with a Case I free inflation at lambda0 = {lambda0}",
+                         "The exact membrane would turn past vertical at the clamp (Case II is not "
+                         "modelled): lower |p| or raise lambda0.") from exc
+
+
+def cap_stretch(d0: float, lambda0: float) -> float:
+    """The mean meridional stretch lambda0 phi/sin(phi) of the spherical cap through the clamp with
+    apex deflection d0 (half-angle phi = 2 atan|d0|): a start for the apex stretch of free inflation
+    (the large-stretch solution is that cap, with p = 2 d0/(1 + d0^2))."""
+    phi = 2.0 * math.atan(abs(d0))
+    return lambda0 * phi / math.sin(phi) if phi > 0.0 else lambda0
+
+
 def _free_at_gap(d, lambda0, n) -> State:
-    """Pressure control starts where the freely inflated apex touches the substrate: d0(p) = d."""
+    """Pressure control starts where the freely inflated apex touches the substrate: d0(p) = d.
+    Newton on (apex stretch, p) with the clamp and the gap as residuals (``_gap_newton``); the root
+    search in p, each value a free-inflation solve (``_gap_bracketed``), where that fails."""
     if d == 0.0:
         return free_inflation(0.0, lambda0, n)
+    st = _gap_newton(d, lambda0, n)
+    return st if st is not None else _gap_bracketed(d, lambda0, n)
+
+
+def _gap_newton(d, lambda0, n) -> State | None:
+    """The free state with apex deflection d by Newton on (lc, p) (compiled, residuals to 1e-13), from
+    the large-stretch spherical cap through the clamp and the apex (half-angle phi = 2 atan|d|, p =
+    2 d/(1 + d^2); lc its mean meridional stretch lambda0 phi/sin(phi)). None when Newton fails, the
+    state is not Case I or lies past the pressure maximum of free inflation (d falling with p along
+    the branch: the root search in p finds the state before it)."""
+    memo: dict = {}
+    try:
+        st = solve_state(Config(lambda0, 0.0, n), "continuous", {"rho_a": 0.0}, ("lc", "p"),
+                         [cap_stretch(d, lambda0), 2.0 * d / (1.0 + d * d)], ("clamp", "d"), {"d": d},
+                         tol=1e-13, memo=memo)
+    except ConvergenceError:
+        return None
+    J = memo.get("J")  # rows (clamp, d), columns (lc, p): d d/d p along r(beta) = 1
+    if J is None or not (abs(st.theta_end) < 0.5 * math.pi and st.lc > 1.0 and st.p * d > 0.0):
+        return None
+    return st if J[1, 1] - J[1, 0] * J[0, 1] / J[0, 0] > 0.0 else None
+
+
+def _gap_bracketed(d, lambda0, n) -> State:
+    """``_free_at_gap`` by brentq on p, each value a free-inflation solve continued from the last."""
     sgn = 1.0 if d > 0 else -1.0
     memo: dict = {}
 

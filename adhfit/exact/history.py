@@ -16,6 +16,8 @@ from .state import DEFAULT_N, Config, State
 __all__ = ["ExactHistory", "exact_history", "COLUMNS"]
 
 END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
+EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
+# shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 
 
@@ -156,36 +158,17 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
 
 def _bracket(pin, c, m, top):
     """Steps in alpha along pinning from the loading end ``m`` until G >= w: (last state below w, its
-    alpha, first state at or above w, its alpha). Each step aims 3 % past where G ~ alpha^2 reaches w
-    (at most 4 times the last step and 0.3; a step longer than the old fixed 0.04 that fails or
-    finds G falling is halved, and steps no longer grow)."""
-    prev, prev_a, step, grow = m, 0.0, 0.04, True
-    vs, xs = [0.0], [pin.x(m)]
-    while True:
-        alpha = prev_a + step
-        if alpha >= top and step > 0.04:
-            step, grow = 0.04, False
-            continue
-        if alpha >= top or step < 1e-9:
-            raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
-                                   "(the clamp turning past vertical, or the contact region going slack: "
-                                   "stretch -> 1, outside a membrane model)",
-                                   {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
-        try:
-            st = pin.solve(alpha, _predict(alpha, vs, xs, pin.x(prev)))
-        except ConvergenceError:
-            step, grow = 0.5 * step, False
-            continue
-        if step > 0.04 and st.G < prev.G:  # a long step past a fold, or onto another branch: shorten
-            step, grow = 0.5 * step, False
-            continue
-        if st.G >= c.w:
-            return prev, prev_a, st, alpha
-        if grow and st.G > 0.0:
-            step = min(max(1.03 * alpha * math.sqrt(c.w / st.G) - alpha, step), 4.0 * step, 0.3)
-        prev, prev_a = st, alpha
-        vs.append(alpha)
-        xs.append(pin.x(st))
+    alpha, first state at or above w, its alpha), in one compiled call (``march.bracket_rows``: each
+    step aims 3 % past where G ~ alpha^2 reaches w; failed steps and long steps finding G falling are
+    halved)."""
+    prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
+    prev = m if prev is None else prev
+    if st is None:
+        raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
+                               "(the clamp turning past vertical, or the contact region going slack: "
+                               "stretch -> 1, outside a membrane model)",
+                               {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
+    return prev, prev_a, st, alpha
 
 
 def _onset(cfg, c, m):
@@ -242,7 +225,7 @@ def _vertex(x, y, c, h):
 def _extremum(stage, states, key, sign):
     """Refine the minimum of sign*key over the delamination path: the vertex of the polynomial through
     the (up to) five rows around the least row, then of the quartic through five states solved to
-    1e-14 on a stencil of a tenth of the row spacing around it (the objective is flat there: its
+    EXTREMUM_TOL on a stencil of a tenth of the row spacing around it (the objective is flat there: its
     derivative, not its value, locates the minimum)."""
     vals = [sign * key(s) for s in states]
     i = int(np.argmin(vals))
@@ -259,15 +242,15 @@ def _extremum(stage, states, key, sign):
     pts = []
     for _ in range(3):
         grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
-        pts = stage.path(grid, vs, xs, xs[-1], tol=1e-14)
+        pts = stage.path(grid, vs, xs, xs[-1], tol=EXTREMUM_TOL)
         if len(pts) < len(grid):
             break
         v = _vertex(grid, [sign * key(st) for st in pts], c, h)
         if v is None:
             break
         if abs(v - c) <= 1.5 * h:
-            fin = stage.path([v], grid, [stage.x(st) for st in pts], xs[-1], tol=1e-14)
-            return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=1e-14)
+            fin = stage.path([v], grid, [stage.x(st) for st in pts], xs[-1], tol=EXTREMUM_TOL)
+            return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
         c = min(max(v, lo + 2 * h), hi - 2 * h)
     return min(pts + [states[i]], key=lambda st: sign * key(st))
 
@@ -284,8 +267,8 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     lambda0 : float
         Pre-stretch, > 1; every observable depends on it.
     n : int
-        Integration steps per membrane segment (the default 14 gives <~5e-9 on the observables, <~3e-9
-        on the summary against n = 128).
+        Integration steps per membrane segment (the default 12 gives <= 9e-8 on every row against
+        n = 128, <= 3e-8 on states against an adaptive reference; benchmarks/results/exact_n.md).
 
     Returns
     -------

@@ -3,7 +3,8 @@
 For each parameter value in turn: a Lagrange predictor through the last (up to) six solved states,
 then ``newton.newton`` from it with the Jacobian carried from row to row (Broyden-updated). The loop
 stops at the first row that fails or turns past vertical at the clamp; the caller handles that row
-(step splitting, or the error) in Python, as before.
+(step splitting, or the error) in Python, as before. ``bracket_rows`` is the adaptive stepping in
+the contact angle that brackets the onset of delamination (G = w) along pinning, also in one call.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from . import kernels as K
 from . import newton as N
 from .jit import jit
 
-__all__ = ["march_rows", "abscissa", "vertex", "PREDICT"]
+__all__ = ["march_rows", "bracket_rows", "abscissa", "vertex", "PREDICT"]
 
 PREDICT = 6  # states the predictor extrapolates through (quintic)
 
@@ -133,3 +134,54 @@ def _derivatives(coef, r):
         if pw >= 2:
             d2 += pw * (pw - 1) * coef[j] * r ** (pw - 2)
     return d1, d2
+
+
+@jit
+def bracket_rows(edge, crv, beta, n, vals, unk, res, tg, pidx, x_m, g_m, w, top, J0, tol, max_iter):
+    """Step ``vals[pidx]`` (pinning: the contact angle alpha) from 0 (unknowns ``x_m``, G = ``g_m``) until
+    G >= w: the step loop of ``history._bracket`` compiled. A step aims 3 % past where G ~ alpha^2
+    reaches w (at most 4 times the last step and 0.3); a failed step (Newton, or past vertical at the
+    clamp) and one longer than 0.04 finding G falling (a fold, another branch) are halved and steps
+    no longer grow; one reaching ``top`` is cut to 0.04, then ends the search. Returns (found, alpha
+    and row of the last state below w, alpha and row of the first at or above w, Jacobian, shots);
+    a row is the unknowns then the N_OUT observables."""
+    k = unk.shape[0]
+    cap = 64
+    vs = np.empty(cap)
+    xs = np.empty((cap, k))
+    vs[0], cnt = 0.0, 1
+    xs[0] = x_m
+    prev, row = np.full(k + K.N_OUT, np.nan), np.full(k + K.N_OUT, np.nan)
+    prev[:k] = x_m
+    prev_a, prev_g, step, grow, total = 0.0, g_m, 0.04, True, 0.0
+    J, cache = J0.copy(), np.full(7, np.nan)
+    while True:
+        alpha = prev_a + step
+        if alpha >= top and step > 0.04:
+            step, grow = 0.04, False
+            continue
+        if alpha >= top or step < 1e-9:
+            return False, prev_a, prev, alpha, row, J, total
+        v = vals.copy()
+        v[pidx] = alpha
+        status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, v, unk, res, tg,
+                                                  predict(alpha, vs, xs, cnt, x_m), J, tol, max_iter, cache)
+        total += shots
+        if status != N.OK or not o[2] < 0.5 * math.pi or (step > 0.04 and o[5] < prev_g):
+            step, grow = 0.5 * step, False
+            continue
+        row[:k] = x
+        row[k:] = o
+        if o[5] >= w:
+            return True, prev_a, prev, alpha, row, J, total
+        if grow and o[5] > 0.0:
+            step = min(max(1.03 * alpha * math.sqrt(w / o[5]) - alpha, step), 4.0 * step, 0.3)
+        prev = row.copy()
+        prev_a, prev_g = alpha, o[5]
+        if cnt == cap:  # only the last PREDICT are extrapolated through
+            vs[:PREDICT] = vs[cnt - PREDICT:].copy()
+            xs[:PREDICT] = xs[cnt - PREDICT:].copy()
+            cnt = PREDICT
+        vs[cnt] = alpha
+        xs[cnt] = x
+        cnt += 1

@@ -16,7 +16,7 @@ from . import march as M
 from . import newton as N
 from .state import Config, State, evaluate
 
-__all__ = ["shoot", "solve_state", "solve_path"]
+__all__ = ["shoot", "solve_state", "solve_path", "solve_bracket"]
 
 _KEYS = ("p", "lc", "rho_a", "alpha", "l1p")
 _RES = {"clamp": N.CLAMP, "a": N.A_RES, "d": N.D_RES, "G": N.G_RES}
@@ -78,6 +78,31 @@ def solve_path(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: 
     memo["shots"] = memo.get("shots", 0) + int(shots)
     return _states(vals.tolist(), unk.tolist(), rows[:done].tolist(), None if in_tg else pidx,
                    np.asarray(values, dtype=float)[:done].tolist())
+
+
+def solve_bracket(cfg: Config, edge: str, fixed: dict, unknowns: tuple, residuals: tuple, targets: dict,
+                  param: str, x_m, g_m: float, w: float, top: float, *, memo: dict, tol: float = 1e-10,
+                  max_iter: int = 40) -> tuple:
+    """Step the parameter ``param`` (a key of ``fixed``) from 0 (unknowns ``x_m``, G = ``g_m``) until
+    G >= w, in one compiled call (``march.bracket_rows``). Returns (last state below w or None for
+    the start, its parameter, first state at or above w or None if the branch ends first, its
+    parameter)."""
+    vals, unk, res, tg, J = _arrays(fixed, unknowns, residuals, targets, memo)
+    pidx = _KEYS.index(param)
+    found, a0, r0, a1, r1, J, shots = M.bracket_rows(
+        _EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg, pidx, np.asarray(x_m, dtype=float),
+        float(g_m), float(w), float(top), J, tol, max_iter)
+    memo["J"] = None if np.isnan(J[0, 0]) else J
+    memo["shots"] = memo.get("shots", 0) + int(shots)
+    prev = None
+    if a0 > 0.0:
+        vals[pidx] = a0
+        prev = _state(vals.copy(), unk, r0)
+    st = None
+    if found:
+        vals[pidx] = a1
+        st = _state(vals.copy(), unk, r1)
+    return prev, float(a0), st, float(a1)
 
 
 def _arrays(fixed, unknowns, residuals, targets, memo):

@@ -13,7 +13,7 @@ from functools import cache
 from operator import attrgetter
 
 from ..errors import ConvergenceError
-from .solve import solve_path, solve_state
+from .solve import solve_bracket, solve_path, solve_state
 from .state import Config, State
 
 __all__ = ["Stage", "making_contact", "pinning", "delamination", "onset", "branch_end"]
@@ -56,6 +56,12 @@ class Stage:
         the first failure (including a state past vertical at the clamp, which ``solve`` reports)."""
         return solve_path(self.cfg, self.edge, self.fixed, self.unknowns, self.residuals, self.targets,
                           self.param, values, vs, xs, x0, memo=self.memo, tol=tol, scale=self.scale)
+
+    def bracket(self, x_m, g_m: float, w: float, top: float) -> tuple:
+        """Steps in the parameter from 0 (the state with unknowns ``x_m`` and G = ``g_m``) until
+        G >= w, in one compiled call (``solve.solve_bracket``)."""
+        return solve_bracket(self.cfg, self.edge, self.fixed, self.unknowns, self.residuals, self.targets,
+                             self.param, x_m, g_m, w, top, memo=self.memo)
 
     def x(self, st: State) -> list:
         """The unknowns of a solved state, as a start for the next one."""

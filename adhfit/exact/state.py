@@ -19,8 +19,9 @@ from . import kernels as K
 
 __all__ = ["Config", "State", "evaluate", "release_rate", "DEFAULT_N"]
 
-DEFAULT_N = 14  # steps per segment: <~3e-9 on the summary against n = 128, states <~5e-9 against the
-# adaptive reference (benchmarks/results/exact.md; 12 left ~1e-8 on states at lambda0 = 1.5 under pressure)
+DEFAULT_N = 12  # steps per segment, the least n whose worst error over lambda0 = 1.1-3 and the four base
+# cases is 5x below issue 11's 1e-6 (benchmarks/results/exact_n.md: <= 1e-8 on the summary, <= 9e-8 on
+# every row against n = 128, <= 3e-8 on states against the adaptive reference; n = 10 left 3e-7 on rows)
 
 
 @dataclass(frozen=True)
