@@ -42,6 +42,7 @@ sys.path.insert(0, str(ROOT))
 
 from adhfit.exact.history import exact_history  # noqa: E402
 from adhfit.exact.state import DEFAULT_N  # noqa: E402
+from bench_exact import _flat  # noqa: E402 - the summary as flat keys, as bench_exact reports it
 from tests import exact_reference as ref  # noqa: E402
 
 LAMBDAS = (1.1, 1.2, 1.5, 2.0, 3.0)
@@ -53,14 +54,6 @@ RS, W, A_MAX = 0.5, 0.2, 0.25
 
 def _run(control, slip, kw, lam, n):
     return exact_history(control, slip, w=W, rs=RS, a_max=A_MAX, lambda0=lam, points=200, n=n, **kw)
-
-
-def _flat(s):
-    out = {"f_max": s["f_max"]}
-    for k in ("onset", "f_min", "turning_point"):
-        for q in ("f", "delta", "p", "a"):
-            out[f"{k}.{q}"] = s[k][q]
-    return out
 
 
 def _worst(got: dict, best: dict) -> tuple[float, str]:
