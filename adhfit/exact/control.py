@@ -79,13 +79,18 @@ class Control:
                     for i in (hi, lo)]
         except ConvergenceError:
             return None
-        d0 = free_curve(p, ends, self.lambda0, self.n)
-        if d0 is None:
+        got = free_curve(p, ends, self.lambda0, self.n, with_stretch=True)
+        if got is None:
             return None
+        d0, lc = got
         mids = np.sort(p)[[len(p) // 20, len(p) // 2, len(p) - 1 - len(p) // 20]]
-        for q in mids:
+        for q in mids:  # direct solves from the interpolated apex stretch (~2 secant steps, not ~8)
             i = int(np.argmin(np.abs(p - q)))
-            if not abs(d0[i] - self.delta(_AtP(p[i], 0.0))) <= D0_CHECK:
+            try:
+                direct = free_inflation(p[i], self.lambda0, self.n, float(lc[i]), self._memo).d
+            except ConvergenceError:
+                return None
+            if not abs(d0[i] - direct) <= D0_CHECK:
                 return None
         return d0
 
