@@ -74,11 +74,14 @@ class Control:
         lo, hi = int(np.argmin(p)), int(np.argmax(p))
         if not p[hi] - p[lo] > 1e-9:
             return None
-        try:
-            ends = [free_inflation(p[i], self.lambda0, self.n, self._guess(abs(p[i])), self._memo)
-                    for i in (hi, lo)]
-        except ConvergenceError:
-            return None
+        ends = []
+        for i in (lo, hi):  # lo first: near the free state's pressure, then continued from both
+            try:
+                ends.append(free_inflation(p[i], self.lambda0, self.n, self._guess(abs(p[i])), self._memo))
+            except ConvergenceError:
+                return None
+            self._seen = (self._seen + [(abs(p[i]), ends[-1].lc)])[-3:]
+        ends = ends[::-1]  # (max p, min p)
         got = free_curve(p, ends, self.lambda0, self.n, with_stretch=True)
         if got is None:
             return None
