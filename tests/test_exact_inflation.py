@@ -126,9 +126,15 @@ def test_free_curve_matches_direct_solves(lambda0, lo, hi):
     p = np.linspace(lo, hi, 41)
     ends = [free_inflation(hi, lambda0), free_inflation(lo, lambda0)]
     d0 = free_curve(p, ends, lambda0)
-    direct = np.array([free_inflation(q, lambda0).d for q in p])
+    sols = [free_inflation(q, lambda0) for q in p]
+    direct = np.array([s.d for s in sols])
     # 1e-10: the accepted difference (adhfit.exact.control.D0_CHECK); ~5e-12 through p = 0, 3e-14 otherwise
     assert np.max(np.abs(d0 - direct)) < 1e-10
+    # the apex stretch at the same roots (the start of control's check solves): same d0, and lc close
+    # to the direct solves' (d0 is smooth in lc: 1e-8 leaves the check solve one secant step)
+    d0s, lc = free_curve(p, ends, lambda0, with_stretch=True)
+    assert np.array_equal(d0s, d0)
+    assert np.max(np.abs(lc - np.array([s.lc for s in sols]))) < 1e-8
 
 
 @pytest.mark.parametrize("d, lambda0", [(0.2, 1.1), (0.2, 1.5), (-0.05, 1.1), (0.4, 3.0), (0.01, 1.2)])

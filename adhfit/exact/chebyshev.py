@@ -2,7 +2,7 @@
 
 Values f_j at x_j = cos(pi j/(N-1)) give the coefficients of the interpolating Chebyshev series by the
 discrete cosine sum; Clenshaw's recurrence evaluates it. ``invert`` solves P(x) = p for many p by
-Newton on the series and returns a second series D at the roots: numpy's polynomial classes cost
+Newton on the series and returns a second series D at the roots (and the roots): numpy's polynomial classes cost
 ~1 ms for a 200-row history, this ~0.05 ms.
 """
 from __future__ import annotations
@@ -56,10 +56,11 @@ def derivative(c):
 @jit
 def invert(pn, dn, p, x0):
     """For each p[i]: the root x of P(x) = p[i] (Newton from x0[i]; P interpolates pn at the Lobatto
-    points, x in [-1, 1]) and the interpolant of dn there. Returns the latter (NaN: no convergence)."""
+    points, x in [-1, 1]) and the interpolant of dn there. Returns (D(x), x) per p (NaN: no
+    convergence)."""
     cp, cd = coefficients(pn), coefficients(dn)
     dp = derivative(cp)
-    out = np.empty(p.shape[0])
+    out = np.empty((2, p.shape[0]))
     for i in range(p.shape[0]):
         x = x0[i]
         ok = False
@@ -71,5 +72,6 @@ def invert(pn, dn, p, x0):
             if abs(step) < 1e-12:  # quadratic convergence: x is then exact to rounding
                 ok = True
                 break
-        out[i] = clenshaw(cd, x) if ok else np.nan
+        out[0, i] = clenshaw(cd, x) if ok else np.nan
+        out[1, i] = x if ok else np.nan
     return out

@@ -74,18 +74,26 @@ class Control:
         lo, hi = int(np.argmin(p)), int(np.argmax(p))
         if not p[hi] - p[lo] > 1e-9:
             return None
-        try:
-            ends = [free_inflation(p[i], self.lambda0, self.n, self._guess(abs(p[i])), self._memo)
-                    for i in (hi, lo)]
-        except ConvergenceError:
+        ends = []
+        for i in (lo, hi):  # lo first: near the free state's pressure, then continued from both
+            try:
+                ends.append(free_inflation(p[i], self.lambda0, self.n, self._guess(abs(p[i])), self._memo))
+            except ConvergenceError:
+                return None
+            self._seen = (self._seen + [(abs(p[i]), ends[-1].lc)])[-3:]
+        ends = ends[::-1]  # (max p, min p)
+        got = free_curve(p, ends, self.lambda0, self.n, with_stretch=True)
+        if got is None:
             return None
-        d0 = free_curve(p, ends, self.lambda0, self.n)
-        if d0 is None:
-            return None
+        d0, lc = got
         mids = np.sort(p)[[len(p) // 20, len(p) // 2, len(p) - 1 - len(p) // 20]]
-        for q in mids:
+        for q in mids:  # direct solves from the interpolated apex stretch (~2 secant steps, not ~8)
             i = int(np.argmin(np.abs(p - q)))
-            if not abs(d0[i] - self.delta(_AtP(p[i], 0.0))) <= D0_CHECK:
+            try:
+                direct = free_inflation(p[i], self.lambda0, self.n, float(lc[i]), self._memo).d
+            except ConvergenceError:
+                return None
+            if not abs(d0[i] - direct) <= D0_CHECK:
                 return None
         return d0
 

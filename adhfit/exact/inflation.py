@@ -105,7 +105,7 @@ def _bracketed(resid, lambda0, p):
 
 
 def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
-               nodes: int = D0_NODES) -> np.ndarray | None:
+               nodes: int = D0_NODES, with_stretch: bool = False):
     """d0(p) at many pressures from free inflation at ``nodes`` apex stretches only.
 
     Parametrized by u = sign(p) sqrt(lc - lambda0) (lc the apex stretch), in which p and d0 are smooth
@@ -124,11 +124,14 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
         Pre-stretch, integration steps.
     nodes : int
         Interpolation points.
+    with_stretch : bool
+        Also return the interpolated apex stretch at each p (a close start for a direct solve).
 
     Returns
     -------
     ndarray or None
-        d0 at each p; None where a node fails or leaves Case I (the caller solves each p instead).
+        d0 at each p (with ``with_stretch``: the tuple (d0, lc)); None where a node fails or leaves
+        Case I (the caller solves each p instead).
     """
     u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
     u = 0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * np.cos(np.pi * np.arange(nodes) / (nodes - 1))
@@ -139,5 +142,9 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     if not np.all(np.diff(pn) < 0.0):
         return None
     x0 = (np.interp(p, pn[::-1], u[::-1]) - 0.5 * (u_lo + u_hi)) / (0.5 * (u_hi - u_lo))
-    d0 = CH.invert(pn, dn, np.asarray(p, dtype=float), x0)
-    return d0 if np.all(np.isfinite(d0)) else None
+    d0, x = CH.invert(pn, dn, np.asarray(p, dtype=float), x0)
+    if not np.all(np.isfinite(d0)):
+        return None
+    if not with_stretch:
+        return d0
+    return d0, lambda0 + (0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * x) ** 2
