@@ -199,6 +199,24 @@ def test_summary_page_embeds_the_small_figure_its_job_drew(tmp_path):
     assert write_thumbnail(tmp_path / "bad") is None  # no plot data: nothing drawn, nothing raised
 
 
+def test_summary_page_ignores_a_small_figure_older_than_its_fit(tmp_path):
+    """A thumbnail.png left by an earlier run (e.g. the folder refitted with --no-plot) is older than the
+    plot_data.json of the fit on the page: the page draws the figure again instead of showing it."""
+    import base64
+    import os
+
+    from adhfit.report.thumbnails import THUMBNAIL
+    rows = _batch(tmp_path)
+    folder = Path(rows[0]["report_dir"])
+    stale = b"\x89PNG\r\n\x1a\n stale bytes"
+    (folder / THUMBNAIL).write_bytes(stale)
+    t = (folder / "plot_data.json").stat().st_mtime_ns
+    os.utime(folder / THUMBNAIL, ns=(t - 10**9, t - 10**9))
+    page = render_summary_html(rows, tmp_path)
+    assert base64.b64encode(stale).decode("ascii") not in page
+    assert page.count("data:image/png;base64,") == 3
+
+
 @pytest.mark.parametrize("bad", ["{", "<script>"])
 def test_summary_page_escapes_errors(tmp_path, bad):
     rows = [{"file": "x.csv", "status": "failed", "error": bad, "report_dir": ""}]

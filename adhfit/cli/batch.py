@@ -315,13 +315,6 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
     return ("serial", None) if workers == 1 or n_jobs == 1 else ("local", workers)
 
 
-def _load_summary() -> None:
-    """Import what summary.html needs (matplotlib, ~0.5 s) while the workers fit, not after them."""
-    from ..report.plots import file_figure  # noqa: PLC0415
-    from ..report.summary_html import write_summary_html  # noqa: F401, PLC0415
-    file_figure()
-
-
 def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
     """Fit every curve of ``args.data`` with ``fit_one`` (the single-curve ``adhfit fit``); returns the exit
     status.  ``args.workers`` local processes (``None``: one per core; absent: this process) or the Dask
@@ -354,7 +347,7 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
         def crashed(i: int, message: str) -> Outcome:
             return _failed(i, jobs[i], base, message, args)
         if kind == "local":
-            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD, while_waiting=_load_summary)
+            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
         else:
             runners.run_dask(run_job, calls, how, report, crashed)
     rows = [outcomes[i].row for i in range(len(jobs))]

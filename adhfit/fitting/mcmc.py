@@ -56,6 +56,7 @@ from typing import Any
 import emcee
 import numpy as np
 
+from ..errors import InputError
 from .chains import Chains, open_chain, save_chains
 from .evidence import StudentT
 from .posterior import Target
@@ -227,8 +228,8 @@ def _tune(samplers, moves, advance, tune_steps: int, tune_rounds: int, theta0, c
         for m, q in zip(moves, fitted):
             m.proposal = q if last else StudentT(q.mean, q.scale * TUNE_EXPLORE**2, q.df)
         if last:
-            return done
-    return 0
+            break
+    return done
 
 
 def _pooled_tau(chains: list[np.ndarray]) -> np.ndarray:
@@ -279,6 +280,9 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     -------
     Chains
     """
+    for name, value in (("tune_steps", tune_steps), ("tune_rounds", tune_rounds)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InputError(name, value, "a positive integer (MCMC tuning: steps per round, rounds)")
     t0 = time.perf_counter()
     pmap = pmap if pmap is not None else ParallelMap(1)
     fn = pmap.register(target)

@@ -50,22 +50,13 @@ def _context(preload: Sequence[str] = ()):
 
 
 def _pass(fn: Callable, calls: Sequence[tuple], indices: list[int], workers: int, report: Report,
-          crashed: Crashed, ctx, while_waiting: Callable[[], Any] | None = None) -> list[int]:
-    """One pool over ``indices``; returns the indices a dead worker process took down.
-
-    ``while_waiting`` runs in this thread once every job is submitted, when the pool's processes exist
-    (a fork pool starts them all at the first submission): no process is forked while it imports.
-    """
+          crashed: Crashed, ctx) -> list[int]:
+    """One pool over ``indices``; returns the indices a dead worker process took down."""
     from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: PLC0415
     from concurrent.futures.process import BrokenProcessPool  # noqa: PLC0415
     broken = []
     with ProcessPoolExecutor(max_workers=max(1, min(workers, len(indices))), mp_context=ctx) as pool:
         futures = {pool.submit(fn, *calls[i]): i for i in indices}
-        if while_waiting is not None:
-            try:
-                while_waiting()
-            except Exception:  # noqa: BLE001, S110 - a head start only: the caller does the work anyway
-                pass
         for fut in as_completed(futures):
             i = futures[fut]
             try:
@@ -78,17 +69,15 @@ def _pass(fn: Callable, calls: Sequence[tuple], indices: list[int], workers: int
 
 
 def run_local(fn: Callable, calls: Sequence[tuple], workers: int, report: Report, crashed: Crashed,
-              preload: Sequence[str] = (), while_waiting: Callable[[], Any] | None = None) -> None:
+              preload: Sequence[str] = ()) -> None:
     """Run ``fn(*call)`` for every call in ``workers`` local processes.
 
     A worker process that dies breaks its pool: the jobs it took down are run again one by one, each in
     a fresh process, so that only the job that crashes is reported to ``crashed``.  ``preload``: modules
     a fork server imports once, where processes are not forked from this one (not on Linux).
-    ``while_waiting``: work for this process once the jobs are submitted (e.g. importing what comes
-    after them), run in this thread and never while a process is being forked.
     """
     ctx = _context(preload)
-    for i in _pass(fn, calls, list(range(len(calls))), workers, report, crashed, ctx, while_waiting):
+    for i in _pass(fn, calls, list(range(len(calls))), workers, report, crashed, ctx):
         if _pass(fn, calls, [i], 1, report, crashed, ctx):
             report(crashed(i, "the worker process died while running this job"))
 

@@ -7,7 +7,6 @@ thumbnail.png its batch job drew or else plot_data.json, in the curve's folder),
 """
 from __future__ import annotations
 
-import base64
 import datetime as _dt
 import json
 import os
@@ -117,13 +116,11 @@ def _multiples(rows: Sequence[Mapping[str, Any]], labels: list[str], reports: li
         short = label if len(label) < 34 else "…" + label[-32:]
         png = thumbnail_png(row["report_dir"]) if row.get("status") == "ok" and row.get("report_dir") else None
         if png is None:
-            cells.append(f"<figure class=\"thumb\"><div class=\"status-failed\">no fit</div>"
+            cells.append(f"<figure><div class=\"status-failed\">no fit</div>"
                          f"<figcaption class=\"muted\">{e(short)}</figcaption></figure>")
             continue
         slip = ((rep or {}).get("slip") or {}).get("parameters_from") or ""
-        data = base64.b64encode(png).decode("ascii")
-        cells.append(f"<figure class=\"thumb\"><img alt=\"{e(label)}\" src=\"data:image/png;base64,{data}\">"
-                     f"<figcaption class=\"muted\">{e(short)}{' · ' + e(slip) if slip else ''}</figcaption></figure>")
+        cells.append(figure(label, png, f"{short} · {slip}" if slip else short))
     return f"<div class=\"thumbs\">{''.join(cells)}</div>"
 
 

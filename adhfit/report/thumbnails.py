@@ -90,11 +90,15 @@ def write_thumbnail(folder: str | Path) -> Path | None:
 
 
 def thumbnail_png(folder: str | Path) -> bytes | None:
-    """The curve's small figure: ``thumbnail.png`` when its job drew it, else drawn now from
-    ``plot_data.json``; None when the folder holds neither."""
+    """The curve's small figure: ``thumbnail.png`` when its job drew it after the fit that wrote
+    ``plot_data.json`` (an older one, e.g. left by an earlier run with figures, is not used), else
+    drawn now from ``plot_data.json``; None when the folder holds neither."""
     folder = Path(folder)
+    png, data = folder / THUMBNAIL, folder / "plot_data.json"
     try:
-        return (folder / THUMBNAIL).read_bytes()
+        if not data.exists() or png.stat().st_mtime_ns >= data.stat().st_mtime_ns:
+            return png.read_bytes()
     except OSError:
-        plot = _plot_data(folder)
-        return draw_thumbnail(plot) if plot else None
+        pass
+    plot = _plot_data(folder)
+    return draw_thumbnail(plot) if plot else None
