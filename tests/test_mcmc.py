@@ -109,12 +109,13 @@ def test_cap_hit_is_reported_not_converged():
     assert any("cap was hit" in w for w in d["warnings"])
 
 
-@pytest.mark.parametrize("name, value", [("tune_rounds", 0), ("tune_rounds", 2.5), ("tune_steps", -1)])
-def test_tuning_settings_out_of_range_are_one_clear_error(name, value):
+@pytest.mark.parametrize("name, value", [("tune_rounds", 0), ("tune_rounds", 2.5), ("tune_steps", -1),
+                                         ("max_steps", 0), ("n_walkers", True), ("check_every", "5")])
+def test_sampler_settings_out_of_range_are_one_clear_error(name, value):
     from adhfit.errors import InputError
     g = _Gauss()
     with pytest.raises(InputError, match=name) as err:
-        sample_posterior(g, g.mean, g.cov, seed=1, max_steps=20, progress=False, **{name: value})
+        sample_posterior(g, g.mean, g.cov, seed=1, progress=False, **({"max_steps": 20} | {name: value}))
     assert "positive integer" in str(err.value) and str(value) in str(err.value)
 
 

@@ -280,9 +280,10 @@ def sample_posterior(target: Target, theta0: np.ndarray, cov0: np.ndarray, *, se
     -------
     Chains
     """
-    for name, value in (("tune_steps", tune_steps), ("tune_rounds", tune_rounds)):
+    for name, value in (("n_walkers", n_walkers), ("n_ensembles", n_ensembles), ("tune_steps", tune_steps),
+                        ("tune_rounds", tune_rounds), ("check_every", check_every), ("max_steps", max_steps)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise InputError(name, value, "a positive integer (MCMC tuning: steps per round, rounds)")
+            raise InputError(name, value, "a positive integer (an MCMC setting)")
     t0 = time.perf_counter()
     pmap = pmap if pmap is not None else ParallelMap(1)
     fn = pmap.register(target)
