@@ -226,7 +226,7 @@ def _gap_newton(d, lambda0, n) -> State | None:
                          tol=1e-13, memo=memo)
     except ConvergenceError:
         return None
-    J = memo.get("J")  # rows (clamp, d), columns (lc, p): d d/d p along r(beta) = 1
+    J = memo.get("J")  # observables' rows (r_end 0, d 1), columns (lc, p): d d/d p along r(beta) = 1
     if J is None or not (abs(st.theta_end) < 0.5 * math.pi and st.lc > 1.0 and st.p * d > 0.0):
         return None
     return st if J[1, 1] - J[1, 0] * J[0, 1] / J[0, 0] > 0.0 else None

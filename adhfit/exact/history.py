@@ -42,8 +42,8 @@ def _split(points):
 
 
 def _predict(v, vs, xs, x0):
-    """Lagrange extrapolation through the last (up to) six solved states (quintic: ~20 % fewer shots
-    than cubic on the base cases at lambda0 = 1.5; a failed step is split by ``march``)."""
+    """Lagrange extrapolation through the last (up to) ``PREDICT`` solved states (as the compiled
+    ``march.predict``; a failed step is split by ``march``)."""
     k = min(len(xs), PREDICT)
     if k == 0:
         return list(x0)

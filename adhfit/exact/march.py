@@ -1,6 +1,6 @@
 """Compiled continuation along one stage: many rows in one call (the row loop of ``history.march``).
 
-For each parameter value in turn: a Lagrange predictor through the last (up to) six solved states,
+For each parameter value in turn: a Lagrange predictor through the last (up to) eight solved states,
 then ``newton.newton`` from it with the Jacobian carried from row to row (Broyden-updated). The loop
 stops at the first row that fails or turns past vertical at the clamp; the caller handles that row
 (step splitting, or the error) in Python, as before. ``bracket_rows`` is the adaptive stepping in
@@ -18,7 +18,8 @@ from .jit import jit
 
 __all__ = ["march_rows", "bracket_rows", "abscissa", "vertex", "PREDICT"]
 
-PREDICT = 6  # states the predictor extrapolates through (quintic)
+PREDICT = 8  # states the predictor extrapolates through (degree 7: median error of the unknowns along
+# delamination 3e-10 against 8e-9 through six, lambda0 = 1.5; ~4 % fewer shots a history)
 
 
 @jit

@@ -6,6 +6,12 @@ are codes (``CLAMP``: r(beta) = 1, ``A``: contact radius, ``D``: gap, ``G``: G =
 Broyden's rule, recomputed when a step fails to halve the residual, then a backtracking line search:
 the algorithm the Python loop had, without its per-shot interpreter cost. The contact field of the
 last (lc, rho_a) is kept (a no-slip or pinned state does not change it between shots).
+
+The Jacobian carried is that of all N_OUT observables (the residuals' rows among them), so that the
+last Newton step can be taken without a shot (``_finish``): once a step has contracted the residual
+well enough that the next one would leave it far below the tolerance, that next step is applied to
+the unknowns and, linearly, to the observables. A continuation row then costs two shots (predictor,
+one step) where it cost three.
 """
 from __future__ import annotations
 
@@ -17,7 +23,11 @@ from . import kernels as K
 from .jit import jit
 
 CLAMP, A_RES, D_RES, G_RES = 0, 1, 2, 3
+OUT_OF = np.array([0, 3, 1, 5])  # the observable each residual code reads: r_end, a, d, G
 OK, BAD_START, BAD_JAC, SINGULAR, NO_LINE, NO_CONV = 0, 1, 2, 3, 4, 5
+FINISH_SAFETY = 3.0  # the shotless last step (``_finish``) when SAFETY * (its predicted residual) < tol
+FINISH_CAP = 30.0  # ... and the residual it starts from is below CAP * tol (the observables move by the
+# step times the Broyden Jacobian's error: <= ~1e-9 at tol 1e-10, tests/test_exact_speed.py)
 
 
 @jit
@@ -99,9 +109,11 @@ def _lin_solve(J, b):
 
 
 @jit
-def _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r0, cache):
+def _jacobian(edge, crv, beta, n, vals, unk, x, o0, cache):
+    """Forward differences of all N_OUT observables in the unknowns (backward where the forward shot
+    leaves the domain)."""
     k = x.shape[0]
-    J = np.empty((r0.shape[0], k))
+    Jo = np.empty((K.N_OUT, k))
     for j in range(k):
         h = 1e-7 * max(1e-3, abs(x[j]))
         xp = x.copy()
@@ -112,9 +124,18 @@ def _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r0, cache):
             h = -h
             o = _at(edge, crv, beta, n, vals, unk, xp, cache)
             if math.isnan(o[0]):
-                return J, False
-        J[:, j] = (_residual(o, res, tg) - r0) / h
-    return J, True
+                return Jo, False
+        Jo[:, j] = (o - o0) / h
+    return Jo, True
+
+
+@jit
+def _rows(Jo, res):
+    """The residuals' Jacobian: their observables' rows of ``Jo``."""
+    J = np.empty((res.shape[0], Jo.shape[1]))
+    for i in range(res.shape[0]):
+        J[i] = Jo[OUT_OF[res[i]]]
+    return J
 
 
 @jit
@@ -149,8 +170,8 @@ def newton_packed(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter)
 def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
     """Solve the residuals for the unknowns from ``x0``; ``J0`` a Jacobian to start from (NaN: none).
 
-    Returns (status, x, out, J, shots) with ``J`` the last Jacobian (NaN when it should not be reused)
-    and ``shots`` the number of shots taken.
+    Returns (status, x, out, J, shots) with ``J`` the last Jacobian of the N_OUT observables (NaN when
+    it should not be reused) and ``shots`` the number of shots taken.
     """
     cache = np.full(7, np.nan)
     return newton_cached(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter, cache)
@@ -159,47 +180,62 @@ def newton(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter):
 @jit
 def newton_cached(edge, crv, beta, n, vals, unk, res, tg, x0, J0, tol, max_iter, cache):
     """``newton`` with the contact field's cache (see ``shot_vals``) kept by the caller: a no-slip
-    pinning march reuses one contact field for all its rows."""
+    pinning march reuses one contact field for all its rows. ``J0`` and the returned Jacobian are
+    those of the N_OUT observables."""
     cache[6] = 0.0
     x = x0.copy()
     o = _at(edge, crv, beta, n, vals, unk, x, cache)
     if math.isnan(o[0]):
         return BAD_START, x, o, J0, cache[6]
     r = _residual(o, res, tg)
-    J = J0.copy()
-    have = not math.isnan(J[0, 0])
+    Jo = J0.copy()
+    have = not math.isnan(Jo[0, 0])
     fresh = False
     for _ in range(max_iter):
         nrm = np.max(np.abs(r))
         if nrm < tol:
-            return OK, x, o, J, cache[6]
+            return OK, x, o, Jo, cache[6]
         if not have:
-            J, good = _jacobian(edge, crv, beta, n, vals, unk, res, tg, x, r, cache)
+            Jo, good = _jacobian(edge, crv, beta, n, vals, unk, x, o, cache)
             if not good:
-                return BAD_JAC, x, o, np.full(J.shape, np.nan), cache[6]
+                return BAD_JAC, x, o, np.full(Jo.shape, np.nan), cache[6]
             have, fresh = True, True
-        dx, ok = _lin_solve(J, -r)
+        dx, ok = _lin_solve(_rows(Jo, res), -r)
         if ok:
             on = _at(edge, crv, beta, n, vals, unk, x + dx, cache)
             if not math.isnan(on[0]):
                 rn = _residual(on, res, tg)
-                if np.max(np.abs(rn)) < 0.5 * nrm:
-                    J = J + np.outer((rn - r) - J @ dx, dx) / np.dot(dx, dx)
+                nn = np.max(np.abs(rn))
+                if nn < 0.5 * nrm:
+                    Jo = Jo + np.outer((on - o) - Jo @ dx, dx) / np.dot(dx, dx)
                     x, o, r, fresh = x + dx, on, rn, False
+                    if FINISH_SAFETY * nn * (nn / nrm) < tol and nn < FINISH_CAP * tol:
+                        return _finish(x, o, r, Jo, res, cache)
                     continue
         if not fresh:
             have = False
             continue
         if not ok:
-            return SINGULAR, x, o, np.full(J.shape, np.nan), cache[6]
+            return SINGULAR, x, o, np.full(Jo.shape, np.nan), cache[6]
         x, o, r, good = _line_search(edge, crv, beta, n, vals, unk, res, tg, x, dx, nrm, cache)
         if not good:
-            return NO_LINE, x, o, np.full(J.shape, np.nan), cache[6]
+            return NO_LINE, x, o, np.full(Jo.shape, np.nan), cache[6]
         have = False
-    J = np.full(J.shape, np.nan)
+    Jo = np.full(Jo.shape, np.nan)
     if np.max(np.abs(r)) < 1e3 * tol:
-        return OK, x, o, J, cache[6]
-    return NO_CONV, x, o, J, cache[6]
+        return OK, x, o, Jo, cache[6]
+    return NO_CONV, x, o, Jo, cache[6]
+
+
+@jit
+def _finish(x, o, r, Jo, res, cache):
+    """The last Newton step without a shot: the step that a step just taken predicts will leave the
+    residual far below the tolerance (its contraction, applied once more), applied to the unknowns
+    and, through the observables' Jacobian, to the observables."""
+    dx, ok = _lin_solve(_rows(Jo, res), -r)
+    if not ok:
+        return OK, x, o, Jo, cache[6]
+    return OK, x + dx, o + Jo @ dx, Jo, cache[6]
 
 
 @jit

@@ -36,8 +36,9 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
     """Solve ``residuals`` = 0 for ``unknowns``.
 
     Newton with a forward-difference Jacobian; with ``memo`` (a dict kept between calls of one
-    continuation) the last Jacobian is reused and updated by Broyden's rule, and recomputed only when a
-    step fails to halve the residual.
+    continuation) the last Jacobian (``memo["J"]``: of the N_OUT observables, rows as
+    ``kernels.N_OUT``, columns as ``unknowns``) is reused and updated by Broyden's rule, and recomputed
+    only when a step fails to halve the residual.
 
     Raises
     ------
@@ -50,7 +51,7 @@ def solve_state(cfg: Config, edge: str, fixed: dict, unknowns: tuple, x0, residu
     out = N.newton_packed(_EDGES[edge], cfg.crv, cfg.beta, cfg.n, vals, unk, res, tg,
                           np.asarray(x0, dtype=float), J, tol, max_iter)
     status = int(out[0])
-    J = out[2 + k + K.N_OUT:].reshape(len(res), k)
+    J = out[2 + k + K.N_OUT:].reshape(K.N_OUT, k)
     memo["J"] = None if np.isnan(J[0, 0]) else J
     memo["shots"] = memo.get("shots", 0) + int(out[1])
     if status != N.OK:
@@ -116,9 +117,9 @@ def _arrays(fixed, unknowns, residuals, targets, memo):
         memo["codes"] = codes
     _, unk, res = codes
     tg = np.array([targets.get("a", 0.0), targets.get("d", 0.0), targets.get("w", 0.0)])
-    J = memo.get("J")
-    if J is None or J.shape != (len(res), len(unknowns)):
-        J = np.full((len(res), len(unknowns)), np.nan)
+    J = memo.get("J")  # of the N_OUT observables (``newton.newton_cached``)
+    if J is None or J.shape != (K.N_OUT, len(unknowns)):
+        J = np.full((K.N_OUT, len(unknowns)), np.nan)
     return vals, unk, res, tg, J
 
 
