@@ -267,8 +267,8 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     lambda0 : float
         Pre-stretch, > 1; every observable depends on it.
     n : int
-        Integration steps per membrane segment (the default 12 gives <= 9e-8 on every row against
-        n = 128, <= 3e-8 on states against an adaptive reference; benchmarks/results/exact_n.md).
+        Integration steps per membrane segment (the default 8 gives <= 5e-8 on every row against
+        n = 128 over lambda0 = 1.1-3; benchmarks/results/exact_n.md).
 
     Returns
     -------

@@ -24,10 +24,17 @@ CONTACT = 1
 START = 3e-3  # apex series start, as a fraction of the segment end (series error ~1e-11; 1e-3 needs
 # 20 % more steps for the same accuracy, 1e-2 leaves a floor of ~5e-10)
 K_APEX = math.asinh(1.0 / START - 1.0)  # e-folds of the graded mesh of a segment from the apex
-FREE_APEX = 2  # a free segment from the apex (free inflation) takes this many times n steps: its last
-# steps reach the clamp, where the membrane curves most (at n steps it set the error of a history at
-# lambda0 <= 1.2: 2e-8 at n = 14, the contact states 5e-10); so does a free segment from a small
-# contact edge, per e-fold of its mesh (``free_from_edge``)
+FREE_APEX = 3.0  # free inflation (a free segment from the apex) takes this many times n steps: its last
+# steps reach the clamp, where the membrane curves most; at 2 n (n = 8) its d0 was smooth in the
+# pressure only to ~4e-10 through p = 0 at lambda0 = 1.1, too rough for the d0(p) interpolant of
+# pressure control (``inflation.free_curve``, checked to 1e-10); 3 n: 2e-11
+EDGE_EFOLD = 2.0  # a free segment from a small contact edge takes this many times n steps per K_APEX
+# e-folds of its mesh (``free_from_edge``: it resembles one from the apex)
+CONTACT_STEPS = 1.3  # a contact segment takes this many times n steps: at n steps it set the error of a
+# history at lambda0 >= 2 (3.7e-7 at n = 8; 1.3 n: 4e-8, 0.7 n: 1.2e-6; benchmarks/results/exact_n.md)
+EDGE_GRADING = 0.5  # the free mesh from a contact edge is graded on this fraction of min(rho_a, beta -
+# rho_a): on the full distance a strongly pulled-off no-slip edge (lambda0 = 1.1, alpha ~ 0.9) set the
+# error of a history (1.6e-6 at n = 8, 3.3e-7 at 10; graded on half: 1.5e-7 at 8, 5e-8 at 10)
 
 
 @jit
@@ -208,25 +215,26 @@ def from_apex(kind, lc, rho_end, n, par, A, B, C):
     """Integrate a segment that starts at the apex (rho = 0) with centre stretch lc."""
     rs0 = START * rho_end
     y0 = _apex(kind, lc, rs0, par)
-    return integrate(kind, y0, rs0, rho_end, rs0, n if kind == CONTACT else FREE_APEX * n, par, A, B, C)
+    return integrate(kind, y0, rs0, rho_end, rs0, (CONTACT_STEPS if kind == CONTACT else FREE_APEX) * n, par,
+                     A, B, C)
 
 
 @jit
 def free_from_edge(y0, rho_a, beta, n, p, A, B, C):
     """Integrate the free membrane from the contact edge rho_a to the clamp beta.
 
-    The mesh is graded towards the edge (steps ~ rho_a there); a small contact is near the apex, whose
-    1/rho terms the grading resolves geometrically, so the steps grow with the number of e-folds K =
-    asinh((beta - rho_a)/rho_a): FREE_APEX n per ``K_APEX`` e-folds (a free segment from a small edge
-    resembles one from the apex), at least n (rho_a >~ 0.08 beta). The count is real (``_steps``): a
+    The mesh is graded towards the edge (steps ~ ``EDGE_GRADING`` rho_a there); a small contact is near
+    the apex, whose 1/rho terms the grading resolves geometrically, so the steps grow with the number of
+    e-folds K = asinh((beta - rho_a)/eps): EDGE_EFOLD n per ``K_APEX`` e-folds (a free segment from a
+    small edge resembles one from the apex), at least n (rho_a >~ 0.13 beta). The count is real (``_steps``): a
     count rounded up jumped by a step at some rho_a, the discretization error with it, and such a jump
     inside the stencil of an extremum's refinement (``history._extremum``) moved the extremum (by
-    1.5e-7 in a at n = 12, where a turning point lay).
+    1.5e-7 in a at n = 12 before, where a turning point lay).
     """
-    eps = min(rho_a, beta - rho_a)
+    eps = EDGE_GRADING * min(rho_a, beta - rho_a)
     if eps <= 0.0:
         return y0.copy()
-    m = max(float(n), FREE_APEX * n * math.asinh((beta - rho_a) / eps) / K_APEX)
+    m = max(float(n), EDGE_EFOLD * n * math.asinh((beta - rho_a) / eps) / K_APEX)
     return integrate(FREE, y0, rho_a, beta, eps, m, p, A, B, C)
 
 

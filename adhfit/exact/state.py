@@ -19,9 +19,9 @@ from . import kernels as K
 
 __all__ = ["Config", "State", "evaluate", "release_rate", "DEFAULT_N"]
 
-DEFAULT_N = 12  # steps per segment, the least n whose worst error over lambda0 = 1.1-3 and the four base
-# cases is 5x below issue 11's 1e-6 (benchmarks/results/exact_n.md: <= 1e-8 on the summary, <= 9e-8 on
-# every row against n = 128, <= 3e-8 on states against the adaptive reference; n = 10 left 3e-7 on rows)
+DEFAULT_N = 8  # steps per segment (contact segments 1.3 n, free inflation 3 n: kernels.py), the least n
+# whose worst error over lambda0 = 1.1-3 and the four base cases is over 10x below issue 11's 1e-6 on
+# every row against n = 128 (benchmarks/results/exact_n.md)
 
 
 @dataclass(frozen=True)
