@@ -65,13 +65,13 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) ->
     (a fold the parameter cannot pass) returns the states solved up to there instead of raising.
     Runs of rows are solved in one compiled call (``Stage.path``); a row that fails there is retried
     here (its error, or the split)."""
-    out, xs, vs = [], [], []
+    out, xs, vs = [], [], []  # xs: the unknowns of the last (up to) PREDICT states of out
     values = list(values)
     while len(vs) < len(values):
-        for st in stage.path(values[len(vs):], vs[-PREDICT:], xs[-PREDICT:], x0):
-            out.append(st)
-            xs.append(stage.x(st))
-            vs.append(values[len(vs)])
+        got = stage.path(values[len(vs):], vs[-PREDICT:], xs, x0)
+        out.extend(got)
+        vs.extend(values[len(vs):len(vs) + len(got)])
+        xs = (xs + [stage.x(st) for st in got[-PREDICT:]])[-PREDICT:]
         if len(vs) == len(values):
             break
         v = values[len(vs)]
@@ -90,7 +90,7 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) ->
                 raise
             st = mid[-1]
         out.append(st)
-        xs.append(stage.x(st))
+        xs = (xs + [stage.x(st)])[-PREDICT:]
         vs.append(v)
     return out
 
