@@ -20,7 +20,7 @@ first two errors are the discretization errors of the history at n.
 
 Usage::
 
-    python benchmarks/bench_exact_n.py [--n 8 9 10 12 14] [--ref-n 10 14]
+    python benchmarks/bench_exact_n.py [--n 6 7 8 10 12] [--ref-n 8 12]
 
 Writes ``benchmarks/results/exact_n.md`` and ``exact_n.json``.
 """
@@ -171,8 +171,8 @@ def _lines(rows, meta) -> list[str]:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--n", type=int, nargs="+", default=[8, 9, 10, 12, 14])
-    ap.add_argument("--ref-n", type=int, nargs="*", default=[10, 14])
+    ap.add_argument("--n", type=int, nargs="+", default=[6, 7, 8, 10, 12])
+    ap.add_argument("--ref-n", type=int, nargs="*", default=[8, 12])
     args = ap.parse_args()
     load0 = os.getloadavg()
     rows = table(args.n, set(args.ref_n))

@@ -168,6 +168,21 @@ def test_weak_adhesion_no_slip_branch_ends_where_large_stretch_does():
     assert ex.inputs["delamination_ends_at_a"] == pytest.approx(ls.inputs["delamination_ends_at_a"], abs=1e-5)
 
 
+def test_no_slip_delamination_never_enters_the_substrate():
+    """No slip, pressure control, lambda0 = 1.78, w = 0.237, a large contact: alpha reaches 0 between two
+    delamination rows and the continuation would carry on smoothly to alpha < 0 (the membrane inside the
+    sphere).
+    The history must end there instead, at alpha = 0, as the large-stretch one does; its f_min (near
+    alpha = 0, where a coarse edge mesh was 9e-7 off) agrees with n = 32 to 1e-7."""
+    control, args = "pressure", dict(d=0.2178, w=0.237, rs=0.5, a_max=0.3728, lambda0=1.775, points=200)
+    h = exact_history(control, "no-slip", **args)
+    alpha = h.columns["alpha"]
+    assert np.all(alpha >= 0.0) and alpha[-1] == pytest.approx(0.0, abs=1e-12)
+    assert h.inputs["delamination_ends_at_a"] == h.columns["a"][-1] > 0.1
+    fine = exact_history(control, "no-slip", n=32, **args)
+    assert h.summary["f_min"]["f"] == pytest.approx(fine.summary["f_min"]["f"], abs=1e-7)
+
+
 @pytest.mark.parametrize("n", STEPS)
 @pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
 def test_pressure_control_states_against_reference(slip, n):

@@ -204,6 +204,8 @@ def _delamination(cfg, c, m, on):
     g[-1] = min(g[-2] * 0.5, 1e-3)
     rho = on.rho_a * g
     states = march(stage, rho, stage.x(on), stop_ok=True)
+    if c.slip == "no-slip":  # past alpha = 0 the membrane would enter the substrate: the branch ends there
+        states = states[:next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))]
     if not states:
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
