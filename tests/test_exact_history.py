@@ -183,6 +183,27 @@ def test_no_slip_delamination_never_enters_the_substrate():
     assert h.summary["f_min"]["f"] == pytest.approx(fine.summary["f_min"]["f"], abs=1e-7)
 
 
+def test_delta_is_nan_where_free_inflation_has_no_case_one_state():
+    """Pressure control, lambda0 = 1.78, a large contact: the loading pushes p to 1.48, beyond the
+    pressures at which the free membrane has a Case I state (up to ~0.97 here). There d0(p) does not
+    exist and delta must be NaN (the large-stretch engine's convention for |p| > 1), not the apex of a
+    shot that curls through the axis and happens to meet r(beta) = 1 (before: delta 3e25, 162, -9.7).
+    Below it, delta = d0(p) - d with d0 from one free-inflation solve per row."""
+    from adhfit.errors import ConvergenceError
+    from adhfit.exact.inflation import free_inflation
+    lam0 = 1.775
+    h = exact_history("pressure", "no-slip", d=0.2178, w=0.237, rs=0.5, a_max=0.3728, lambda0=lam0, points=80)
+    for q in (1.0, 1.2, 1.47):
+        with pytest.raises(ConvergenceError):
+            free_inflation(q, lam0)
+    p, delta, d = h.columns["p"], h.columns["delta"], h.columns["d"]
+    assert np.any(p > 1.0) and np.all(np.isnan(delta[p > 1.0]))
+    low = np.flatnonzero(p < 0.95)
+    assert len(low) > 30 and np.all(np.isfinite(delta[low]))
+    for i in low[::4]:
+        assert delta[i] == pytest.approx(free_inflation(p[i], lam0).d - d[i], abs=1e-10)
+
+
 @pytest.mark.parametrize("n", STEPS)
 @pytest.mark.parametrize("slip", ["frictionless", "no-slip"])
 def test_pressure_control_states_against_reference(slip, n):

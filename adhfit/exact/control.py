@@ -36,6 +36,7 @@ class Control:
     _seen: list = field(default_factory=list)  # (|p|, apex stretch) of the last d0(p): continuation
     _memo: dict = field(default_factory=dict)  # slope of the free-inflation secant iterations
     _d0: dict = field(default_factory=dict)  # d0 by pressure, as solved
+    _beyond: float = math.inf  # the least |p| found without a Case I free inflation (none at any |p| above)
     end: tuple = ("a_max", None)  # the loading end as given
 
     @property
@@ -46,6 +47,8 @@ class Control:
         """delta = d0(p) - d with the exact free-inflation deflection (NaN without a Case I d0)."""
         if self.control == "displacement":
             return self.free.d - st.d
+        if st.p not in self._d0 and abs(st.p) >= self._beyond:
+            self._d0[st.p] = math.nan
         if st.p not in self._d0:  # one value per pressure (onset, f_min, turning point may coincide)
             try:
                 fi = free_inflation(st.p, self.lambda0, self.n, self._guess(abs(st.p)), self._memo)
@@ -53,6 +56,7 @@ class Control:
                 self._d0[st.p] = fi.d
             except ConvergenceError:
                 self._d0[st.p] = math.nan
+                self._beyond = min(self._beyond, abs(st.p))
         return self._d0[st.p] - st.d
 
     def deltas(self, states: list) -> np.ndarray:

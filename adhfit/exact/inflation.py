@@ -61,15 +61,24 @@ def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float
             lc = float(lc)
             st = State(lc, 0.0, 0.0, q, 0.0, float(y[1]), 0.0, 0.0, float(y[0]), float(y[2]), lc, lc, lc,
                        float(y[4]), float(y[5]))
-    if st is None or not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
+    if st is None or not _case_one(st):
         # no guess, no quick convergence, or a root outside Case I: bracket from lambda0 upwards
         st = evaluate(cfg, q, _bracketed(resid, lambda0, p))
-    if not (st.theta_end < 0.5 * math.pi and math.isfinite(st.d)):
+    if not _case_one(st):
         raise ConvergenceError("exact free inflation: no Case I state (theta > pi/2 at the clamp)",
                                {"p": p, "lambda0": lambda0})
     if p < 0.0:
         st.p, st.d, st.theta_end, st.v = p, -st.d, -st.theta_end, -st.v
     return st
+
+
+def _case_one(st: State) -> bool:
+    """Whether a free-inflation root (at |p| > 0) is a Case I membrane: 0 < theta_end < pi/2 and, the
+    inflated meridian being convex (theta rising from the apex), 0 < d0 <= tan(theta_end). Beyond the
+    pressures Case I reaches, the bracketing finds roots of r(beta) = 1 of shots that curl through
+    the axis (lambda0 = 1.78, p = 1-1.47: lc 18-41, d0 -9927 to 1e10, theta_end -3.1 to 0.17)."""
+    th = st.theta_end
+    return 0.0 < th < 0.5 * math.pi and math.isfinite(st.d) and 0.0 < st.d <= math.tan(th)
 
 
 def apex_deflection(p: float, lambda0: float, n: int = DEFAULT_N) -> float:
