@@ -17,20 +17,33 @@ from adhfit.scene import Scene
 B, RS, MU_H, W_AD, PRESSURE = 2e-3, 1e-3, 2.0, 0.4, 600.0  # p = P b / (2 μh) = 0.3; w = 0.2
 
 
-def scene(lambda0: float, membrane: str = "auto", pressure: float = PRESSURE) -> Scene:
-    """The test's scene (SI): b = 2 mm, R_s = 1 mm, P = 600 Pa under displacement control."""
+GAP = 0.2 * B  # pressure control: the gap between the clamp plane and the substrate's apex
+
+
+def scene(lambda0: float, membrane: str = "auto", pressure: float = PRESSURE, control: str = "displacement") -> Scene:
+    """The test's scene (SI): b = 2 mm, R_s = 1 mm, P = 600 Pa under displacement control (or the gap
+    ``GAP`` under pressure control)."""
+    if control == "pressure":
+        return Scene(membrane_radius=B, substrate_radius=RS, control="pressure", gap=GAP, prestretch=lambda0,
+                     membrane_model=membrane)
     return Scene(membrane_radius=B, substrate_radius=RS, control="displacement", pressure=pressure,
                  prestretch=lambda0, membrane_model=membrane)
 
 
 def exact_curve(lambda0: float, slip: str, *, noise: float, seed: int, rows: int = 240,
-                delta_max: float = 0.25, pressure: float = PRESSURE) -> tuple[Curve, dict]:
-    """(curve, truth): loading to δ = delta_max·b, unloading past pull-off, force noise ``noise``·F_max."""
-    h = exact_history("displacement", slip, p=pressure * B / (2 * MU_H), w=W_AD / MU_H, rs=RS / B,
-                      lambda0=lambda0, delta_max=delta_max, points=600)
+                delta_max: float = 0.25, pressure: float = PRESSURE, control: str = "displacement",
+                pressure_max: float = 1500.0) -> tuple[Curve, dict]:
+    """(curve, truth): loading to δ = delta_max·b (or, under pressure control at the gap ``GAP``, to
+    P = ``pressure_max`` Pa), unloading past pull-off, force noise ``noise``·F_max."""
+    if control == "pressure":
+        h = exact_history("pressure", slip, d=GAP / B, w=W_AD / MU_H, rs=RS / B, lambda0=lambda0,
+                          p_max=pressure_max * B / (2 * MU_H), points=600)
+    else:
+        h = exact_history("displacement", slip, p=pressure * B / (2 * MU_H), w=W_AD / MU_H, rs=RS / B,
+                          lambda0=lambda0, delta_max=delta_max, points=600)
     c = h.columns
     stage, stable = np.asarray(c["stage"]), np.asarray(c["stable"], bool)
-    x, f = np.asarray(c["delta"], float), np.asarray(c["f"], float)
+    x, f = np.asarray(c["delta" if control == "displacement" else "p"], float), np.asarray(c["f"], float)
     mc = np.flatnonzero(stage == "making_contact")
     back = np.concatenate([[mc[-1]], np.flatnonzero((stage != "making_contact") & stable)])
     xl, fl, xr, fr = x[mc], f[mc], x[back], f[back]
@@ -47,7 +60,10 @@ def exact_curve(lambda0: float, slip: str, *, noise: float, seed: int, rows: int
     sigma = noise * scale * fl[-1]
     rng = np.random.default_rng(seed)
     force = f_true + rng.normal(0.0, sigma, f_true.size)
-    xm = B * np.concatenate([up, down]) - 5e-6  # measured displacement, offset 5 µm
-    curve = Curve(path="<exact synthetic>", control="displacement", x=xm, force=force,
+    if control == "pressure":
+        xm = (2 * MU_H / B) * np.concatenate([up, down])  # P = p · 2 μh / b
+    else:
+        xm = B * np.concatenate([up, down]) - 5e-6  # measured displacement, offset 5 µm
+    curve = Curve(path="<exact synthetic>", control=control, x=xm, force=force,
                   line=np.arange(2, xm.size + 2), i_turn=int(np.argmax(xm)))
     return curve, {"work_of_adhesion": W_AD, "mu_h": MU_H, "slip": slip, "sigma": sigma}

@@ -111,7 +111,7 @@ def approximation_effect(raw: RawFit, sigma: float) -> Effect:
                   se={k: _rel_se(raw, k) for k in shift}, start=start)
 
 
-def decide(effects: dict[str, Effect], lambda0: float, requested: str) -> dict:
+def decide(effects: dict[str, Effect], lambda0: float, requested: str, outside: tuple = ()) -> dict:
     """The report's ``model`` entry: which membrane and why (one sentence with the numbers).
 
     Parameters
@@ -121,7 +121,14 @@ def decide(effects: dict[str, Effect], lambda0: float, requested: str) -> dict:
     lambda0 : float
         The scene's pre-stretch.
     requested : {"auto", "large-stretch", "exact"}
+    outside : tuple of str
+        Slip conditions whose large-stretch optimum lies outside the exact membrane's domain (no Case I
+        history there): the approximation is off by more than any data resolve.
     """
+    if outside and requested == "auto":
+        return {"membrane": "exact", "why": f"auto: at λ0 = {lambda0:g} the exact membrane has no history at the "
+                f"large-stretch optimum ({', '.join(outside)}): the approximation is far off there, beyond "
+                "what any data resolve."}
     if not effects:
         membrane = "exact" if requested == "exact" else "large-stretch"
         return {"membrane": membrane, "why": f"{requested} requested at λ0 = {lambda0:g}; the exact membrane "

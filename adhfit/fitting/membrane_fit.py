@@ -15,7 +15,7 @@ import math
 from ..errors import AdhfitError, ConvergenceError
 from .lsq import RawFit, minimise, residual_function
 from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
-from .model import CurveModel, ModelDomainError
+from .model import CurveModel, ModelDomainError, Segments
 from .starts import Start, noise_estimate
 
 __all__ = ["choose_and_refit", "exact_refit", "wants_profile", "effect_warning"]
@@ -29,6 +29,13 @@ EXACT_TOL = 1e-5
 #: standard error of ln W_ad or ln μh above which an exact fit's covariance interval is not trusted
 #: (the log-normal interval is then far from the likelihood's shape): profile instead
 MAX_COVARIANCE_SE = 0.2
+#: factors on W_ad and μh together (W_ad/μh kept) tried in turn, when the exact membrane has no history at
+#: the large-stretch optimum, for the first start where it has one: at small λ0 the approximation
+#: underestimates μh (by 33 % at λ0 = 1.1 on an F–P curve to P b/2μh = 0.75), and the dimensionless
+#: pressure of its optimum, P b/2μh, lies beyond what the exact membrane reaches in Case I
+DOMAIN_STEPS = (1.25, 1.6, 2.0, 2.5, 3.2, 4.0)
+#: refits at most, each at the pull-off row the exact model puts at the last optimum (``_follow_split``)
+SPLIT_ROUNDS = 4
 
 
 def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
@@ -49,6 +56,9 @@ def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
     residual = residual_function(exact, par, raw.scale, sigma_est)
     si = par.si(raw.best.params)
     starts = [Start(effect.start)] if effect is not None else []
+    if effect is None and not _computable(exact, si):
+        stiffer = _domain_start(exact, si)
+        starts += [Start(stiffer)] if stiffer is not None else []
     starts.append(Start(si))
     best, tried = None, []
     for s in starts:
@@ -64,8 +74,41 @@ def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
             f"(W_ad = {si['work_of_adhesion']:.4g} J/m^2, μh = {si['mu_h']:.4g} N/m)",
             {"hint": "no exact history there (Case I only: the membrane must not turn past vertical at the "
                      "clamp); --membrane large-stretch fits the approximation"})
+    if exact.fixed_split:
+        exact, best = _follow_split(exact, best, residual_args=(par, raw.scale, sigma_est), sigma_given=raw.sigma_given,
+                                    tried=tried)
     return RawFit(slip=raw.slip, best=best, model=exact, par=par, scale=raw.scale, sigma_given=raw.sigma_given,
                   starts=list(raw.starts) + tried, alternatives=_alternatives(raw, par.si(best.params)))
+
+
+def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given: bool, tried: list):
+    """Refit with the detachment row the exact model itself puts pull-off at, while that differs from the
+    row kept from the large-stretch fit (up to :data:`SPLIT_ROUNDS` times). Where the approximation is far
+    off (λ0 = 1.1) its pull-off row was 4 rows early, and the exact fit held to that row stopped at
+    χ² 6x the truth's, W_ad 9 % low."""
+    par = residual_args[0]
+    free = CurveModel(exact.curve, exact.scene, exact.slip, points=exact.points, segments=exact.segments,
+                      membrane="exact")
+    f = exact.force
+    for _ in range(SPLIT_ROUNDS):
+        si = par.si(best.params)
+        try:
+            j = free.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+        except ModelDomainError:
+            break
+        seg = exact.segments
+        if j is None or j == seg.i_jump or not seg.i_turn + 1 < j < exact.x.size:
+            break
+        moved = CurveModel(exact.curve, exact.scene, exact.slip, points=exact.points, fixed_split=True,
+                           segments=Segments(n=seg.n, i_turn=seg.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1]))),
+                           membrane="exact")
+        moved.n_histories, moved.n_evaluations = exact.n_histories, exact.n_evaluations
+        res = minimise(residual_function(moved, *residual_args), best.params, scale_covar=not sigma_given,
+                       max_nfev=MAX_NFEV, tol=EXACT_TOL)
+        tried.append({**{k: float(v) for k, v in par.si(res.params).items()}, "chisqr": float(res.chisqr),
+                      "membrane": "exact", "split": j})
+        exact, best = moved, res
+    return exact, best
 
 
 def _alternatives(raw: RawFit, exact_si: dict) -> tuple:
@@ -75,6 +118,16 @@ def _alternatives(raw: RawFit, exact_si: dict) -> tuple:
     ls = raw.par.si(raw.best.params)
     return tuple(dict(alt, **{k: exact_si[k] * alt[k] / ls[k] for k in ("work_of_adhesion", "mu_h")})
                  for alt in raw.alternatives)
+
+
+def _domain_start(model: CurveModel, si: dict) -> dict | None:
+    """The first of W_ad and μh scaled by :data:`DOMAIN_STEPS` (offsets kept) at which ``model`` (exact)
+    has a history; None if none has."""
+    for k in DOMAIN_STEPS:
+        s = dict(si, work_of_adhesion=si["work_of_adhesion"] * k, mu_h=si["mu_h"] * k)
+        if _computable(model, s):
+            return s
+    return None
 
 
 def _computable(model: CurveModel, s: dict) -> bool:
@@ -105,13 +158,15 @@ def choose_and_refit(raws: dict[str, RawFit], scene, membrane: str) -> tuple[dic
         The fits to report (exact or the given ones), the report's ``model`` entry, and the
         :class:`~.membrane_choice.Effect` per slip condition (empty when the exact membrane failed).
     """
-    effects = {}
+    effects, outside = {}, []
     for s, raw in raws.items():
         try:
             effects[s] = approximation_effect(raw, _sigma(raw))
-        except (ModelDomainError, AdhfitError, ValueError):
+        except ModelDomainError:
+            outside.append(s)
+        except (AdhfitError, ValueError):
             continue
-    model = decide(effects, scene.prestretch, membrane)
+    model = decide(effects, scene.prestretch, membrane, tuple(outside))
     if model["membrane"] != "exact":
         return raws, model, effects
     out = {s: exact_refit(raw, effects.get(s)) for s, raw in raws.items()}
