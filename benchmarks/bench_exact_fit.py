@@ -8,6 +8,7 @@ and the number of histories.  CPU seconds are the figure to compare (the machine
 
     PYTHONPATH=. python benchmarks/bench_exact_fit.py [--quick]
     PYTHONPATH=. python benchmarks/bench_exact_fit.py --replicates 8   # seeds 20.. at 0.5 % noise
+    PYTHONPATH=. python benchmarks/bench_exact_fit.py --control pressure   # F-P curves (0.4 mm gap, to 1.5 kPa)
 
 ``--replicates N`` fits N noise draws of λ0 = 1.2 (frictionless) and 1.5 (no-slip) instead: mean and
 spread of the errors, coverage of the 95 % intervals, wrong slip selections (exact_fit_replicates.md).
@@ -33,11 +34,11 @@ CASES = [(lam, slip, noise) for lam in (1.1, 1.2, 1.5, 2.0, 3.0) for slip in ("f
          for noise in (0.005, 0.01)]
 
 
-def run(lam: float, slip: str, noise: float, seed: int = 1) -> dict:
+def run(lam: float, slip: str, noise: float, seed: int = 1, control: str = "displacement") -> dict:
     """One fit of one exact curve; the row of the results table."""
-    curve, truth = exact_curve(lam, slip, noise=noise, seed=seed)
+    curve, truth = exact_curve(lam, slip, noise=noise, seed=seed, control=control)
     t, c = time.perf_counter(), time.process_time()
-    res = fit_curve(curve, scene(lam))
+    res = fit_curve(curve, scene(lam, control=control))
     row = {"lambda0": lam, "slip": slip, "noise": noise, "membrane": res.model["membrane"],
            "verdict": res.slip["verdict"], "selected": res.slip["selected"],
            "wall_s": time.perf_counter() - t, "cpu_s": time.process_time() - c, "histories": res.n_histories,
@@ -72,6 +73,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="0.5 %% noise only")
     ap.add_argument("--replicates", type=int, default=0, help="N noise draws per case instead (see above)")
+    ap.add_argument("--control", choices=("displacement", "pressure"), default="displacement",
+                    help="pressure: F-P curves at a 0.4 mm gap loaded to 1.5 kPa (exact_fit_pressure.*)")
     args = ap.parse_args()
     if args.replicates:
         lines = ["# Exact-membrane fits: replicates (default settings)", "",
@@ -80,16 +83,18 @@ def main() -> None:
         (ROOT / "benchmarks" / "results" / "exact_fit_replicates.md").write_text("\n".join(lines) + "\n")
         print("\n".join(lines))
         return
-    rows = [run(*c) for c in CASES if not (args.quick and c[2] != 0.005)]
+    rows = [run(*c, control=args.control) for c in CASES if not (args.quick and c[2] != 0.005)]
+    name = "exact_fit" if args.control == "displacement" else "exact_fit_pressure"
     git = {"cwd": ROOT, "capture_output": True, "text": True}
     rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], **git).stdout.strip()
     dirty = subprocess.run(["git", "status", "--porcelain", "adhfit"], **git).stdout
     machine = (f"commit {rev}{'+dirty' if dirty.strip() else ''}; Python {platform.python_version()}, "
                f"nproc {os.cpu_count()} (shared with other jobs: compare CPU seconds)")
     out = ROOT / "benchmarks" / "results"
-    (out / "exact_fit.json").write_text(json.dumps(rows, indent=1))
-    lines = ["# Exact-membrane fits (default settings)", "", f"`PYTHONPATH=. python benchmarks/bench_exact_fit.py"
-             f"{' --quick' if args.quick else ''}`", "", machine, "",
+    (out / f"{name}.json").write_text(json.dumps(rows, indent=1))
+    lines = [f"# Exact-membrane fits (default settings, {args.control} control)", "",
+             f"`PYTHONPATH=. python benchmarks/bench_exact_fit.py{' --quick' if args.quick else ''}"
+             f"{' --control pressure' if args.control == 'pressure' else ''}`", "", machine, "",
              "| λ0 | truth | noise | membrane | slip verdict | W_ad err | μh err | in 95 % (W/μh) | CPU s | wall s |"
              " histories |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -97,7 +102,7 @@ def main() -> None:
                      f"{100 * r['work_of_adhesion_error']:+.2f} % | {100 * r['mu_h_error']:+.2f} % | "
                      f"{'yes' if r['work_of_adhesion_covered'] else 'NO'}/{'yes' if r['mu_h_covered'] else 'NO'} | "
                      f"{r['cpu_s']:.1f} | {r['wall_s']:.1f} | {r['histories']} |")
-    (out / "exact_fit.md").write_text("\n".join(lines) + "\n")
+    (out / f"{name}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 
