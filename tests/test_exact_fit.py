@@ -50,6 +50,18 @@ def _check_recovery(result, truth, tol=0.02):
 # contracts: scene key, CLI option, Python argument (cheap)
 
 
+def test_model_choice_when_the_large_stretch_optimum_is_outside_the_exact_domain():
+    """No exact history at the large-stretch optimum: the approximation is off beyond any data, so auto
+    picks the exact membrane and a large-stretch request says so (instead of 'effect unknown')."""
+    from adhfit.fitting.membrane_choice import decide
+    auto = decide({}, 1.1, "auto", ("no-slip",))
+    assert auto["membrane"] == "exact" and "no history" in auto["why"] and "no-slip" in auto["why"]
+    ls = decide({}, 1.1, "large-stretch", ("no-slip",))
+    assert ls["membrane"] == "large-stretch" and "no history" in ls["why"] and "--membrane exact" in ls["why"]
+    assert decide({}, 1.1, "exact", ("no-slip",))["membrane"] == "exact"
+    assert decide({}, 1.1, "auto")["membrane"] == "large-stretch"  # nothing computed, nothing outside
+
+
 def test_scene_membrane_model_key(tmp_path):
     path = tmp_path / "scene.toml"
     path.write_text(SCENE_TEXT.format(model=""))

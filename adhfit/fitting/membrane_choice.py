@@ -125,10 +125,13 @@ def decide(effects: dict[str, Effect], lambda0: float, requested: str, outside: 
         Slip conditions whose large-stretch optimum lies outside the exact membrane's domain (no Case I
         history there): the approximation is off by more than any data resolve.
     """
-    if outside and requested == "auto":
-        return {"membrane": "exact", "why": f"auto: at λ0 = {lambda0:g} the exact membrane has no history at the "
-                f"large-stretch optimum ({', '.join(outside)}): the approximation is far off there, beyond "
-                "what any data resolve."}
+    if outside and requested != "exact":
+        where = (f"at λ0 = {lambda0:g} the exact membrane has no history at the large-stretch optimum "
+                 f"({', '.join(outside)}): the approximation is far off there, beyond what any data resolve")
+        if requested == "auto":
+            return {"membrane": "exact", "why": f"auto: {where}."}
+        return {"membrane": "large-stretch", "why": f"large-stretch requested: {where}; --membrane exact "
+                "fits the exact membrane."}
     if not effects:
         membrane = "exact" if requested == "exact" else "large-stretch"
         return {"membrane": membrane, "why": f"{requested} requested at λ0 = {lambda0:g}; the exact membrane "
