@@ -8,7 +8,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
-from .inflation import free_curve, free_inflation
+from .inflation import checked_curve, free_inflation
 from .solve import solve_state
 from .state import Config, State
 
@@ -57,9 +57,10 @@ class Control:
 
     def deltas(self, states: list) -> np.ndarray:
         """``delta`` of every state. Under pressure control d0(p) comes from ``free_curve`` (free
-        inflation at a few stretches, interpolated), checked against direct solves at the rows nearest
-        the ends and the middle of the rows' range of p, and replaced by one solve per row where they
-        differ by more than ``D0_CHECK`` (or the curve leaves Case I)."""
+        inflation at a few stretches, interpolated), checked against free-inflation states independent
+        of it (``checked_curve``) at the rows nearest the ends and the middle of the rows' range of p,
+        and replaced by one solve per row where they differ by more than ``D0_CHECK`` (or the curve
+        leaves Case I)."""
         d = np.array([st.d for st in states], dtype=float)
         if self.control == "displacement":
             return self.free.d - d
@@ -82,20 +83,9 @@ class Control:
                 return None
             self._seen = (self._seen + [(abs(p[i]), ends[-1].lc)])[-3:]
         ends = ends[::-1]  # (max p, min p)
-        got = free_curve(p, ends, self.lambda0, self.n, with_stretch=True)
-        if got is None:
-            return None
-        d0, lc = got
         mids = np.sort(p)[[len(p) // 20, len(p) // 2, len(p) - 1 - len(p) // 20]]
-        for q in mids:  # direct solves from the interpolated apex stretch (~2 secant steps, not ~8)
-            i = int(np.argmin(np.abs(p - q)))
-            try:
-                direct = free_inflation(p[i], self.lambda0, self.n, float(lc[i]), self._memo).d
-            except ConvergenceError:
-                return None
-            if not abs(d0[i] - direct) <= D0_CHECK:
-                return None
-        return d0
+        rows = np.array([int(np.argmin(np.abs(p - q))) for q in mids])
+        return checked_curve(p, ends, self.lambda0, rows, D0_CHECK, self.n)
 
     def _guess(self, q: float) -> float | None:
         """Apex stretch of free inflation at |p| = q, extrapolated from the last (up to 3) solved."""

@@ -10,9 +10,10 @@ from ..errors import ConvergenceError
 from . import chebyshev as CH
 from . import kernels as K
 from . import newton as N
+from . import scaled as S
 from .state import DEFAULT_N, Config, State, evaluate
 
-__all__ = ["free_inflation", "apex_deflection", "free_curve"]
+__all__ = ["free_inflation", "apex_deflection", "free_curve", "checked_curve"]
 
 D0_NODES = 20  # apex stretches of free_curve (d0 to ~5e-12 when p changes sign, ~3e-14 otherwise; 16
 # nodes left 8e-10 through p = 0 at lambda0 = 1.1, over the accepted 1e-10 of control.D0_CHECK)
@@ -112,7 +113,8 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     from p = 0 through the pressure maximum of free inflation (d0(p) itself has a square-root branch
     point there, so a polynomial in p would converge slowly): p(u) and d0(u) are interpolated on
     Chebyshev points between the ends (``chebyshev``), and p(u) = p is inverted by Newton on the
-    interpolant.
+    interpolant. The ends are nodes; each other node is one shot and a few Runge-Kutta steps
+    (``scaled.free_at_stretches``: the scaling symmetry of the membrane equations).
 
     Parameters
     ----------
@@ -133,18 +135,63 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
         d0 at each p (with ``with_stretch``: the tuple (d0, lc)); None where a node fails or leaves
         Case I (the caller solves each p instead).
     """
-    u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
-    u = 0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * np.cos(np.pi * np.arange(nodes) / (nodes - 1))
-    out = N.free_at_stretches(u, lambda0, 1.0 / lambda0, n, ends[0].p)
-    if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
+    crv = _Curve.build(ends, lambda0, n, nodes)
+    got = None if crv is None else crv.at(np.asarray(p, dtype=float))
+    if got is None:
         return None
-    pn, dn = out[0], np.sign(u) * out[1]
-    if not np.all(np.diff(pn) < 0.0):
+    return got if with_stretch else got[0]
+
+
+def checked_curve(p: np.ndarray, ends: list, lambda0: float, rows: np.ndarray, tol: float,
+                  n: int = DEFAULT_N) -> np.ndarray | None:
+    """``free_curve``'s d0 at the pressures p, checked at the rows ``rows``: free inflation at each such
+    row's interpolated apex stretch (``scaled.free_at_points``: one shot and a Newton in the material
+    coordinate, a state independent of the interpolant, at a pressure within ~1e-8 of the row's)
+    against the interpolant at that state's own pressure. None when the curve fails or a check differs
+    by more than ``tol``."""
+    crv = _Curve.build(ends, lambda0, n, D0_NODES)
+    got = None if crv is None else crv.at(np.asarray(p, dtype=float))
+    if got is None:
         return None
-    x0 = (np.interp(p, pn[::-1], u[::-1]) - 0.5 * (u_lo + u_hi)) / (0.5 * (u_hi - u_lo))
-    d0, x = CH.invert(pn, dn, np.asarray(p, dtype=float), x0)
-    if not np.all(np.isfinite(d0)):
+    d0, lc = got
+    q = np.abs(p[rows])
+    chk = S.free_at_points(lc[rows], q, lambda0, n)
+    if not (np.all(np.isfinite(chk)) and np.all(chk[2] < 0.5 * math.pi)):
         return None
-    if not with_stretch:
-        return d0
-    return d0, lambda0 + (0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * x) ** 2
+    sgn = np.where(p[rows] < 0.0, -1.0, 1.0)
+    at = crv.at(sgn * chk[0])
+    if at is None or not np.all(np.abs(at[0] - sgn * chk[1]) <= tol):
+        return None
+    return d0
+
+
+class _Curve:
+    """The Chebyshev interpolant of (p, d0) in u = sign(p) sqrt(lc - lambda0) (see ``free_curve``)."""
+
+    def __init__(self, pn, dn, u_lo, u_hi, lambda0):
+        self.pn, self.dn, self.lambda0 = pn, dn, lambda0
+        self.mid, self.half = 0.5 * (u_lo + u_hi), 0.5 * (u_hi - u_lo)
+        self.u = self.mid + self.half * np.cos(np.pi * np.arange(pn.shape[0]) / (pn.shape[0] - 1))
+
+    @classmethod
+    def build(cls, ends, lambda0, n, nodes):
+        """From free inflation at the ends (max p, min p) and ``nodes`` - 2 nodes between (None: a
+        node failed, left Case I, or p(u) is not monotonic)."""
+        u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
+        crv = cls(np.zeros(nodes), np.zeros(nodes), u_lo, u_hi, lambda0)
+        known = np.full((3, nodes), np.nan)
+        for j, st in ((0, ends[0]), (nodes - 1, ends[1])):
+            known[:, j] = st.p, abs(st.d), abs(st.theta_end)
+        out = S.free_at_stretches(crv.u, lambda0, n, known)
+        if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
+            return None
+        crv.pn, crv.dn = out[0], np.sign(crv.u) * out[1]
+        return crv if np.all(np.diff(crv.pn) < 0.0) else None
+
+    def at(self, p):
+        """(d0, lc) at the pressures p (None: Newton on the interpolant failed somewhere)."""
+        x0 = (np.interp(p, self.pn[::-1], self.u[::-1]) - self.mid) / self.half
+        d0, x = CH.invert(self.pn, self.dn, p, x0)
+        if not np.all(np.isfinite(d0)):
+            return None
+        return d0, self.lambda0 + (self.mid + self.half * x) ** 2
