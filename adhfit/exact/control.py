@@ -8,6 +8,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, InputError
+from . import scaled as S
 from .inflation import checked_curve, free_inflation
 from .solve import solve_state
 from .state import Config, State
@@ -71,10 +72,36 @@ class Control:
         return d0 - d
 
     def _d0_curve(self, p: np.ndarray) -> np.ndarray | None:
-        """d0 at the pressures p from ``free_curve`` if it passes the checks, else None."""
+        """d0 at the pressures p from ``checked_curve`` if it passes the checks, else None."""
         lo, hi = int(np.argmin(p)), int(np.argmax(p))
         if not p[hi] - p[lo] > 1e-9:
             return None
+        ends = self._node_ends(p[lo], p[hi]) or self._solved_ends(p, lo, hi)
+        if ends is None:
+            return None
+        at = np.sort(p)[(CHECK_AT * (len(p) - 1)).astype(int)]
+        rows = np.array([int(np.argmin(np.abs(p - q))) for q in at])
+        return checked_curve(p, ends, self.lambda0, rows, CHECK_MARGIN * D0_CHECK, self.n)
+
+    def _node_ends(self, p_lo: float, p_hi: float) -> list | None:
+        """Free states just beyond the rows' pressures (by ``END_COVER`` of their range at most:
+        ``scaled.end_node``, ~2 shots each), by secant iterations from the free state the history
+        starts at; (max p, min p), or None where that fails."""
+        fr, lam, cover = self.free, self.lambda0, END_COVER * (p_hi - p_lo)
+        u_f = math.copysign(math.sqrt(max(fr.lc - lam, 0.0)), fr.p)
+        lo = S.end_node(p_lo, -cover, lam, self.n, u_f, fr.p, 0.0, 0.0)
+        if not math.isfinite(lo[1]):
+            return None
+        far = abs(lo[1] - fr.p) > 0.1 * (p_hi - p_lo)  # else the secant from lo and p = 0 (flat)
+        hi = S.end_node(p_hi, cover, lam, self.n, lo[0], lo[1], u_f if far else 0.0, fr.p if far else 0.0)
+        if not math.isfinite(hi[1]):
+            return None
+        ends = [_node_state(*hi, lam), _node_state(*lo, lam)]
+        self._seen = (self._seen + [(abs(st.p), st.lc) for st in ends[::-1]])[-3:]
+        return ends
+
+    def _solved_ends(self, p: np.ndarray, lo: int, hi: int) -> list | None:
+        """Free inflation at the rows' extreme pressures (max p, min p); None where a solve fails."""
         ends = []
         for i in (lo, hi):  # lo first: near the free state's pressure, then continued from both
             try:
@@ -82,10 +109,7 @@ class Control:
             except ConvergenceError:
                 return None
             self._seen = (self._seen + [(abs(p[i]), ends[-1].lc)])[-3:]
-        ends = ends[::-1]  # (max p, min p)
-        mids = np.sort(p)[[len(p) // 20, len(p) // 2, len(p) - 1 - len(p) // 20]]
-        rows = np.array([int(np.argmin(np.abs(p - q))) for q in mids])
-        return checked_curve(p, ends, self.lambda0, rows, D0_CHECK, self.n)
+        return ends[::-1]
 
     def _guess(self, q: float) -> float | None:
         """Apex stretch of free inflation at |p| = q, extrapolated from the last (up to 3) solved."""
@@ -110,6 +134,20 @@ class Control:
 
 
 D0_CHECK = 1e-10  # largest accepted difference of the interpolated d0 from a direct solve
+CHECK_AT = np.array([0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95])  # quantiles of p of the rows checked
+CHECK_MARGIN = 0.25  # the checks accept a quarter of D0_CHECK: the interpolant's error oscillates along
+# the range, the rows checked see a fraction of its peaks (1e-10 at lambda0 = 3, d = 0.2, w = 1, checks
+# ~5e-11)
+
+
+END_COVER = 0.01  # the interpolated range of p reaches past the rows' by at most this part of theirs
+
+
+def _node_state(u: float, p: float, d: float, theta: float, lambda0: float) -> State:
+    """A free-inflation state from ``scaled.end_node`` (the observables ``free_curve`` reads)."""
+    lc = lambda0 + u * u
+    return State(lc, 0.0, 0.0, p, 0.0, d, 0.0, 0.0, 1.0, math.copysign(theta, p), lc, lc, lc, math.nan,
+                 math.nan)
 
 
 @dataclass

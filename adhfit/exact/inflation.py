@@ -15,8 +15,8 @@ from .state import DEFAULT_N, Config, State, evaluate
 
 __all__ = ["free_inflation", "apex_deflection", "free_curve", "checked_curve"]
 
-D0_NODES = 20  # apex stretches of free_curve (d0 to ~5e-12 when p changes sign, ~3e-14 otherwise; 16
-# nodes left 8e-10 through p = 0 at lambda0 = 1.1, over the accepted 1e-10 of control.D0_CHECK)
+D0_NODES = 20  # apex stretches of free_curve (d0 to <~3e-11 on 50 pressure-control histories at lambda0 =
+# 1.1-3, w up to 1, of which 8 refined to 39 nodes by checked_curve; 16 nodes: 23 refined, 18: 14)
 
 
 def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None,
@@ -109,12 +109,12 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
                nodes: int = D0_NODES, with_stretch: bool = False):
     """d0(p) at many pressures from free inflation at ``nodes`` apex stretches only.
 
-    Parametrized by u = sign(p) sqrt(lc - lambda0) (lc the apex stretch), in which p and d0 are smooth
-    from p = 0 through the pressure maximum of free inflation (d0(p) itself has a square-root branch
-    point there, so a polynomial in p would converge slowly): p(u) and d0(u) are interpolated on
-    Chebyshev points between the ends (``chebyshev``), and p(u) = p is inverted by Newton on the
-    interpolant. The ends are nodes; each other node is one shot and a few Runge-Kutta steps
-    (``scaled.free_at_stretches``: the scaling symmetry of the membrane equations).
+    The nodes lie at the Chebyshev points of u = sign(p) sqrt(lc - lambda0) (lc the apex stretch)
+    between the ends (which are nodes); each other node is one shot and a few Runge-Kutta steps
+    (``scaled.free_at_stretches``: the scaling symmetry of the membrane equations). p is interpolated
+    as a polynomial in d0 through them (smooth from p = 0 through the pressure maximum of free
+    inflation, where d0(p) itself has a square-root branch point, so a polynomial in p would converge
+    slowly; see ``_Curve`` for why not in u), and p(d0) = p is inverted by Newton (``chebyshev``).
 
     Parameters
     ----------
@@ -147,51 +147,87 @@ def checked_curve(p: np.ndarray, ends: list, lambda0: float, rows: np.ndarray, t
     """``free_curve``'s d0 at the pressures p, checked at the rows ``rows``: free inflation at each such
     row's interpolated apex stretch (``scaled.free_at_points``: one shot and a Newton in the material
     coordinate, a state independent of the interpolant, at a pressure within ~1e-8 of the row's)
-    against the interpolant at that state's own pressure. None when the curve fails or a check differs
-    by more than ``tol``."""
+    against the interpolant at that state's own pressure. With ``D0_NODES`` nodes first, then twice
+    the intervals (``_Curve.refine``: wide ranges, e.g. p = -0.64 .. 0.27 at lambda0 = 1.1). None when
+    both fail or a check differs by more than ``tol``."""
     crv = _Curve.build(ends, lambda0, n, D0_NODES)
-    got = None if crv is None else crv.at(np.asarray(p, dtype=float))
-    if got is None:
-        return None
-    d0, lc = got
-    q = np.abs(p[rows])
-    chk = S.free_at_points(lc[rows], q, lambda0, n)
+    for refined in (False, True):
+        got = None if crv is None else crv.at(np.asarray(p, dtype=float), stretch=False)
+        lc = None if got is None else crv.at(p[rows])
+        if lc is not None and _passes(crv, p[rows], lc[1], tol, n):
+            return got[0]
+        crv = None if crv is None or refined else crv.refine(n)
+    return None
+
+
+def _passes(crv, p, lc, tol, n):
+    q = np.abs(p)
+    chk = S.free_at_points(lc, q, crv.lambda0, n)
     if not (np.all(np.isfinite(chk)) and np.all(chk[2] < 0.5 * math.pi)):
-        return None
-    sgn = np.where(p[rows] < 0.0, -1.0, 1.0)
-    at = crv.at(sgn * chk[0])
-    if at is None or not np.all(np.abs(at[0] - sgn * chk[1]) <= tol):
-        return None
-    return d0
+        return False
+    sgn = np.where(p < 0.0, -1.0, 1.0)
+    at = crv.at(sgn * chk[0], stretch=False)
+    return at is not None and bool(np.all(np.abs(at[0] - sgn * chk[1]) <= tol))
 
 
 class _Curve:
-    """The Chebyshev interpolant of (p, d0) in u = sign(p) sqrt(lc - lambda0) (see ``free_curve``)."""
+    """d0(p) from free inflation at the Chebyshev points of u = sign(p) sqrt(lc - lambda0): p
+    interpolated in t = d0 through the nodes' own d0 (barycentric form), resampled on the Lobatto points
+    of t for ``chebyshev.invert`` (the same polynomial). In t, not u: the nodes are exact states of the
+    discrete model, but its p at a given apex stretch carries a discretization part that does not
+    vanish with p like p^2 (relative error ~1e-11/u^2 at n = 12): p(u) and d0(u) are rough at ~1e-11
+    near u = 0, together, so d0(p) of a u-interpolant through p = 0 stopped at ~3e-11 for any number of
+    nodes (1e-10 at lambda0 = 3), where p(d0) reaches ~1e-14."""
 
-    def __init__(self, pn, dn, u_lo, u_hi, lambda0):
-        self.pn, self.dn, self.lambda0 = pn, dn, lambda0
+    def __init__(self, u_lo, u_hi, lambda0, nodes):
+        self.lambda0 = lambda0
         self.mid, self.half = 0.5 * (u_lo + u_hi), 0.5 * (u_hi - u_lo)
-        self.u = self.mid + self.half * np.cos(np.pi * np.arange(pn.shape[0]) / (pn.shape[0] - 1))
+        self.x = np.cos(np.pi * np.arange(nodes) / (nodes - 1))
+        self.u = self.mid + self.half * self.x
+        self.pn = self.dn = self.th = self.w = self.pc = self.tc = np.zeros(nodes)
 
     @classmethod
     def build(cls, ends, lambda0, n, nodes):
         """From free inflation at the ends (max p, min p) and ``nodes`` - 2 nodes between (None: a
-        node failed, left Case I, or p(u) is not monotonic)."""
+        node failed, left Case I, or p or d0 is not monotonic in u)."""
         u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
-        crv = cls(np.zeros(nodes), np.zeros(nodes), u_lo, u_hi, lambda0)
+        crv = cls(u_lo, u_hi, lambda0, nodes)
         known = np.full((3, nodes), np.nan)
         for j, st in ((0, ends[0]), (nodes - 1, ends[1])):
             known[:, j] = st.p, abs(st.d), abs(st.theta_end)
-        out = S.free_at_stretches(crv.u, lambda0, n, known)
+        return crv._solve(known, np.full(nodes, np.nan), n)
+
+    def refine(self, n):
+        """The curve on twice the intervals: the Lobatto points of 2N - 1 nodes hold those of N, the
+        new ones solved from p(u) of this curve's nodes there (one shot each)."""
+        m = self.pn.shape[0]
+        crv = _Curve(self.mid - self.half, self.mid + self.half, self.lambda0, 2 * m - 1)
+        known = np.full((3, 2 * m - 1), np.nan)
+        known[:, ::2] = self.pn, np.abs(self.dn), self.th
+        pred = np.full(2 * m - 1, np.nan)
+        cp = CH.coefficients(self.pn)
+        for j in range(1, 2 * m - 1, 2):
+            pred[j] = abs(CH.clenshaw(cp, crv.x[j]))
+        return crv._solve(known, pred, n)
+
+    def _solve(self, known, pred, n):
+        out = S.free_at_stretches(self.u, self.lambda0, n, known, pred)
         if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
             return None
-        crv.pn, crv.dn = out[0], np.sign(crv.u) * out[1]
-        return crv if np.all(np.diff(crv.pn) < 0.0) else None
+        self.pn, self.dn, self.th = out[0], np.sign(self.u) * out[1], out[2]
+        if not (np.all(np.diff(self.pn) < 0.0) and np.all(np.diff(self.dn) < 0.0)):
+            return None
+        self.w = CH.bary_weights(self.dn)
+        self.tc = 0.5 * (self.dn[0] + self.dn[-1]) + 0.5 * (self.dn[0] - self.dn[-1]) * self.x
+        self.pc = CH.bary_eval(self.dn, self.w, self.pn, self.tc)
+        return self if np.all(np.diff(self.pc) < 0.0) else None
 
-    def at(self, p):
-        """(d0, lc) at the pressures p (None: Newton on the interpolant failed somewhere)."""
-        x0 = (np.interp(p, self.pn[::-1], self.u[::-1]) - self.mid) / self.half
-        d0, x = CH.invert(self.pn, self.dn, p, x0)
+    def at(self, p, stretch=True):
+        """(d0, lc) at the pressures p (lc None without ``stretch``; None: Newton on the interpolant
+        failed somewhere)."""
+        mid, half = 0.5 * (self.tc[0] + self.tc[-1]), 0.5 * (self.tc[0] - self.tc[-1])
+        x0 = (np.interp(p, self.pc[::-1], self.tc[::-1]) - mid) / half
+        d0, _ = CH.invert(self.pc, self.tc, p, x0)
         if not np.all(np.isfinite(d0)):
             return None
-        return d0, self.lambda0 + (self.mid + self.half * x) ** 2
+        return d0, (self.lambda0 + CH.bary_eval(self.dn, self.w, self.u, d0) ** 2 if stretch else None)
