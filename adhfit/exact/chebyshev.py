@@ -14,7 +14,7 @@ import numpy as np
 
 from .jit import jit
 
-__all__ = ["coefficients", "clenshaw", "derivative", "invert", "bary_weights", "bary_eval"]
+__all__ = ["coefficients", "clenshaw", "derivative", "invert", "bary_weights", "bary_eval", "tail_bound", "curve", "roots"]
 
 
 @jit
@@ -22,12 +22,15 @@ def coefficients(f):
     """Chebyshev coefficients of the interpolant of f at the Lobatto points x_j = cos(pi j/(N-1))."""
     n = f.shape[0]
     m = n - 1
+    cs = np.empty(2 * m)  # cos(pi l/m), l = j k mod 2m
+    for l in range(2 * m):
+        cs[l] = math.cos(math.pi * l / m)
     c = np.empty(n)
     for k in range(n):
         acc = 0.0
         for j in range(n):
             w = 0.5 if (j == 0 or j == m) else 1.0
-            acc += w * f[j] * math.cos(math.pi * ((j * k) % (2 * m)) / m)
+            acc += w * f[j] * cs[(j * k) % (2 * m)]
         c[k] = 2.0 * acc / m
     c[0] *= 0.5
     c[m] *= 0.5
@@ -114,3 +117,60 @@ def bary_eval(t, w, f, x):
             den += c
         out[i] = f[hit] if hit >= 0 else num / den
     return out
+
+
+@jit
+def tail_bound(c):
+    """The truncation estimate of the roots of P(x) = p for the series c: its last two coefficients
+    over the least |dP/dx| at the Lobatto points."""
+    n = c.shape[0]
+    dp = derivative(c)
+    lo = math.inf
+    for j in range(n):
+        lo = min(lo, abs(clenshaw(dp, math.cos(math.pi * j / (n - 1)))))
+    return (abs(c[n - 1]) + abs(c[n - 2])) / lo
+
+
+@jit
+def curve(t, f, th):
+    """The interpolant of f(t) through nodes t (both decreasing; ``th`` their clamp angles, < pi/2):
+    barycentric weights w, the Lobatto points tc of [t[-1], t[0]], the values fc there, and the
+    truncation estimate (in t) of the roots of f(t) = p (``tail_bound``). ok False when a node is not
+    finite or not Case I, or t, f or fc is not strictly decreasing."""
+    n = t.shape[0]
+    ok = True
+    for j in range(n):
+        ok = ok and math.isfinite(t[j]) and math.isfinite(f[j]) and th[j] < 0.5 * math.pi
+        if j > 0:
+            ok = ok and t[j] < t[j - 1] and f[j] < f[j - 1]
+    tc, fc = np.empty(n), np.empty(n)
+    if not ok:
+        return tc, tc, fc, math.inf, False
+    w = bary_weights(t)
+    mid, half = 0.5 * (t[0] + t[n - 1]), 0.5 * (t[0] - t[n - 1])
+    for j in range(n):
+        tc[j] = mid + half * math.cos(math.pi * j / (n - 1))
+    fc[:] = bary_eval(t, w, f, tc)
+    for j in range(1, n):
+        ok = ok and fc[j] < fc[j - 1]
+    return w, tc, fc, half * tail_bound(coefficients(fc)), ok
+
+
+@jit
+def roots(tc, fc, p):
+    """t with F(t) = p for each p (F through fc at the Lobatto points tc, decreasing): ``invert`` from
+    linear interpolation between them. ok False where Newton failed."""
+    n = tc.shape[0]
+    mid, half = 0.5 * (tc[0] + tc[n - 1]), 0.5 * (tc[0] - tc[n - 1])
+    x0 = np.empty(p.shape[0])
+    for i in range(p.shape[0]):
+        j = 1
+        while j < n - 1 and fc[j] > p[i]:
+            j += 1
+        s = (p[i] - fc[j - 1]) / (fc[j] - fc[j - 1])
+        x0[i] = (tc[j - 1] + s * (tc[j] - tc[j - 1]) - mid) / half
+    out = invert(fc, tc, p, x0)
+    ok = True
+    for i in range(p.shape[0]):
+        ok = ok and math.isfinite(out[0, i])
+    return out[0], ok

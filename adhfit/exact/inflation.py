@@ -142,32 +142,32 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
     return got if with_stretch else got[0]
 
 
-def checked_curve(p: np.ndarray, ends: list, lambda0: float, rows: np.ndarray, tol: float,
+def checked_curve(p: np.ndarray, ends: list, lambda0: float, rows: np.ndarray, tol: float, est: float,
                   n: int = DEFAULT_N) -> np.ndarray | None:
     """``free_curve``'s d0 at the pressures p, checked at the rows ``rows``: free inflation at each such
     row's interpolated apex stretch (``scaled.free_at_points``: one shot and a Newton in the material
     coordinate, a state independent of the interpolant, at a pressure within ~1e-8 of the row's)
-    against the interpolant at that state's own pressure. With ``D0_NODES`` nodes first, then twice
-    the intervals (``_Curve.refine``: wide ranges, e.g. p = -0.64 .. 0.27 at lambda0 = 1.1). None when
-    both fail or a check differs by more than ``tol``."""
+    against the interpolant at that state's own pressure; and the interpolant's truncation estimate
+    (its last Chebyshev coefficients over the least slope: above the error on 50 histories, by 1-30x)
+    must not exceed ``est``. With ``D0_NODES`` nodes first, then twice the intervals
+    (``_Curve.refine``: wide ranges, e.g. p = -0.64 .. 0.27 at lambda0 = 1.1). None when both fail."""
     crv = _Curve.build(ends, lambda0, n, D0_NODES)
+    p = np.asarray(p, dtype=float)
     for refined in (False, True):
-        got = None if crv is None else crv.at(np.asarray(p, dtype=float), stretch=False)
-        lc = None if got is None else crv.at(p[rows])
-        if lc is not None and _passes(crv, p[rows], lc[1], tol, n):
+        got = crv.at(p, stretch=False) if crv is not None and crv.est <= est else None
+        if got is not None and _passes(crv, p[rows], crv.stretch(got[0][rows]), tol, n):
             return got[0]
         crv = None if crv is None or refined else crv.refine(n)
     return None
 
 
 def _passes(crv, p, lc, tol, n):
-    q = np.abs(p)
-    chk = S.free_at_points(lc, q, crv.lambda0, n)
-    if not (np.all(np.isfinite(chk)) and np.all(chk[2] < 0.5 * math.pi)):
-        return False
-    sgn = np.where(p < 0.0, -1.0, 1.0)
-    at = crv.at(sgn * chk[0], stretch=False)
-    return at is not None and bool(np.all(np.abs(at[0] - sgn * chk[1]) <= tol))
+    """Whether free inflation at the apex stretches lc (near the pressures p) agrees with the curve."""
+    chk = S.free_at_points(lc, np.abs(p), crv.lambda0, n)
+    sgn = np.sign(p)
+    got = crv.at(sgn * chk[0], stretch=False)  # (NaN where a check failed: no roots)
+    return got is not None and bool(np.all(np.abs(got[0] - sgn * chk[1]) <= tol)
+                                    and np.all(chk[2] < 0.5 * math.pi))
 
 
 class _Curve:
@@ -185,6 +185,7 @@ class _Curve:
         self.x = np.cos(np.pi * np.arange(nodes) / (nodes - 1))
         self.u = self.mid + self.half * self.x
         self.pn = self.dn = self.th = self.w = self.pc = self.tc = np.zeros(nodes)
+        self.est = math.inf  # the truncation estimate of its d0 (``chebyshev.tail_bound``)
 
     @classmethod
     def build(cls, ends, lambda0, n, nodes):
@@ -212,22 +213,18 @@ class _Curve:
 
     def _solve(self, known, pred, n):
         out = S.free_at_stretches(self.u, self.lambda0, n, known, pred)
-        if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
-            return None
         self.pn, self.dn, self.th = out[0], np.sign(self.u) * out[1], out[2]
-        if not (np.all(np.diff(self.pn) < 0.0) and np.all(np.diff(self.dn) < 0.0)):
-            return None
-        self.w = CH.bary_weights(self.dn)
-        self.tc = 0.5 * (self.dn[0] + self.dn[-1]) + 0.5 * (self.dn[0] - self.dn[-1]) * self.x
-        self.pc = CH.bary_eval(self.dn, self.w, self.pn, self.tc)
-        return self if np.all(np.diff(self.pc) < 0.0) else None
+        self.w, self.tc, self.pc, self.est, ok = CH.curve(self.dn, self.pn, self.th)
+        return self if ok else None
 
     def at(self, p, stretch=True):
         """(d0, lc) at the pressures p (lc None without ``stretch``; None: Newton on the interpolant
         failed somewhere)."""
-        mid, half = 0.5 * (self.tc[0] + self.tc[-1]), 0.5 * (self.tc[0] - self.tc[-1])
-        x0 = (np.interp(p, self.pc[::-1], self.tc[::-1]) - mid) / half
-        d0, _ = CH.invert(self.pc, self.tc, p, x0)
-        if not np.all(np.isfinite(d0)):
+        d0, ok = CH.roots(self.tc, self.pc, p)
+        if not ok:
             return None
-        return d0, (self.lambda0 + CH.bary_eval(self.dn, self.w, self.u, d0) ** 2 if stretch else None)
+        return d0, (self.stretch(d0) if stretch else None)
+
+    def stretch(self, d0):
+        """The apex stretch at the apex deflections d0 (u interpolated in d0 through the nodes)."""
+        return self.lambda0 + CH.bary_eval(self.dn, self.w, self.u, d0) ** 2

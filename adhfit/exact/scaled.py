@@ -26,7 +26,7 @@ import numpy as np
 from . import kernels as K
 from .jit import jit
 
-__all__ = ["free_at_stretch", "free_at_stretches", "free_at_points", "end_node", "RESHOOT"]
+__all__ = ["RESHOOT", "end_node", "free_at_points", "free_at_stretch", "free_at_stretches"]
 
 RESHOOT = 1e-3  # largest relative distance of rho* from the shot's end kept (see above)
 STEP_CAP = 0.1  # largest Newton step in rho, over rho (one Runge-Kutta step of the mesh's last size)
@@ -83,15 +83,18 @@ def free_at_stretch(lc, lambda0, n, q):
 
 
 @jit
-def end_node(target, cover, lambda0, n, ua, pa, ub, pb):
+def end_node(target, cover, lambda0, n, us, ps):
     """A node beyond the rows' pressures: (u, p, d0, theta_end) with (p - target)/cover in [0, 1] (u =
-    sign(p) sqrt(lc - lambda0), d0 signed), by secant iterations in u (each ``_shot``; ~2) from the
-    free states (ua, pa), (ub, pb) (pa != pb; (0, 0) is the flat membrane). NaN when not found."""
+    sign(p) sqrt(lc - lambda0), d0 signed), by inverse interpolation (u as the polynomial in p through
+    the last three free states, each new one a ``_shot``: the secant crept up on the concave p(u) near
+    the pressure maximum, 5-7 shots where this takes 3-5) from the free states (us, ps) (distinct p;
+    (0, 0) is the flat membrane). NaN when not found."""
     aim = target + 0.3 * cover
-    for _ in range(6):
-        if pb == pa:
-            break
-        u = ua + (aim - pa) * (ub - ua) / (pb - pa)
+    m = us.shape[0]
+    pu, pp = np.empty(m + 8), np.empty(m + 8)
+    pu[:m], pp[:m] = us, ps
+    for k in range(m, m + 8):
+        u = _extrapolate(pp, pu, k, aim, 3)
         if not (math.isfinite(u) and u != 0.0):
             break
         p, d, th, moved = _shot(lambda0 + u * u, lambda0, n, abs(aim))
@@ -103,7 +106,7 @@ def end_node(target, cover, lambda0, n, ua, pa, ub, pb):
                 p, d, th = free_at_stretch(lambda0 + u * u, lambda0, n, abs(p))
                 p, d = math.copysign(p, u), math.copysign(d, u)
             return u, p, d, th
-        ua, pa, ub, pb = ub, pb, u, p
+        pu[k], pp[k] = u, p
     return math.nan, math.nan, math.nan, math.nan
 
 
