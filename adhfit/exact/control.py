@@ -58,9 +58,9 @@ class Control:
 
     def deltas(self, states: list) -> np.ndarray:
         """``delta`` of every state. Under pressure control d0(p) comes from ``free_curve`` (free
-        inflation at a few stretches, interpolated), checked against free-inflation states independent
-        of it (``checked_curve``) at the rows nearest the ends and the middle of the rows' range of p,
-        and replaced by one solve per row where they differ by more than ``D0_CHECK`` (or the curve
+        inflation at a few stretches, interpolated), checked by its truncation estimate and against
+        free-inflation states independent of it at five rows spread over the range of p
+        (``checked_curve``), and replaced by one solve per row where a check fails (or the curve
         leaves Case I)."""
         d = np.array([st.d for st in states], dtype=float)
         if self.control == "displacement":

@@ -15,7 +15,7 @@ there, instead of a secant iteration in p of three to four shots. The point rho*
 clamp of the shot's mesh by the error of the prediction; the discretization error of the result
 then differs from that of a direct solve (mesh ending at rho*) by about that relative distance times
 the error itself (1e-3 left <= 3e-12 at lambda0 = 1.1-3, p up to 0.6, n = 12): beyond ``RESHOOT``
-the shot is repeated at the pressure just found, whose rho* is then the clamp to ~1e-6.
+the shot is repeated at the pressure just found, whose rho* then lies much closer to the clamp.
 """
 from __future__ import annotations
 
