@@ -84,20 +84,17 @@ class Control:
 
     def _node_ends(self, p_lo: float, p_hi: float) -> list | None:
         """Free states just beyond the rows' pressures (by ``END_COVER`` of their range at most:
-        ``scaled.end_node``, 2-5 shots each), from the free state the history starts at and the flat
+        ``scaled.end_node``, 1-4 shots each), from the free state the history starts at and the flat
         membrane; (max p, min p), or None where that fails."""
         fr, lam, cover = self.free, self.lambda0, END_COVER * (p_hi - p_lo)
         if fr.p == 0.0:
             return None
         u_f = math.copysign(math.sqrt(max(fr.lc - lam, 0.0)), fr.p)
-        lo = S.end_node(p_lo, -cover, lam, self.n, np.array([0.0, u_f]), np.array([0.0, fr.p]))
+        lo = S.end_node(p_lo, -cover, lam, self.n, 0.0, 0.0, u_f, fr.p)
         if not math.isfinite(lo[1]):
             return None
-        pts = [(0.0, 0.0), (lo[0], lo[1])]  # the free state too unless close to lo
-        if abs(lo[1] - fr.p) > 0.1 * (p_hi - p_lo):
-            pts.insert(1, (u_f, fr.p))
-        us, ps = np.array(pts).T.copy()
-        hi = S.end_node(p_hi, cover, lam, self.n, us, ps)
+        far = abs(lo[1] - fr.p) > 0.1 * (p_hi - p_lo)  # else from lo and the flat membrane
+        hi = S.end_node(p_hi, cover, lam, self.n, u_f if far else 0.0, fr.p if far else 0.0, lo[0], lo[1])
         if not math.isfinite(hi[1]):
             return None
         ends = [_node_state(*hi, lam), _node_state(*lo, lam)]

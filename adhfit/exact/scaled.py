@@ -83,18 +83,30 @@ def free_at_stretch(lc, lambda0, n, q):
 
 
 @jit
-def end_node(target, cover, lambda0, n, us, ps):
+def _rational_root(ua, pa, ub, pb, aim):
+    """u with p(u) = aim on p = a u/(1 + b u^2) through (ua, pa) and (ub, pb): odd in u and with a
+    maximum, like free inflation's p(u); the secant through them where that fit is singular (a point
+    at u = 0). The root on the rising branch; the model's maximum where aim lies above it."""
+    det = ua * ub * (pa * ua - pb * ub)
+    if det != 0.0:
+        a = pa * pb * (ua * ua - ub * ub) / det
+        b = (ua * pb - ub * pa) / det
+        den = a + math.copysign(math.sqrt(max(a * a - 4.0 * aim * aim * b, 0.0)), a)
+        if den != 0.0 and math.isfinite(den):
+            return 2.0 * aim / den
+    return ua + (aim - pa) * (ub - ua) / (pb - pa)
+
+
+@jit
+def end_node(target, cover, lambda0, n, ua, pa, ub, pb):
     """A node beyond the rows' pressures: (u, p, d0, theta_end) with (p - target)/cover in [0, 1] (u =
-    sign(p) sqrt(lc - lambda0), d0 signed), by inverse interpolation (u as the polynomial in p through
-    the last three free states, each new one a ``_shot``: the secant crept up on the concave p(u) near
-    the pressure maximum, 5-7 shots where this takes 3-5) from the free states (us, ps) (distinct p;
-    (0, 0) is the flat membrane). NaN when not found."""
+    sign(p) sqrt(lc - lambda0), d0 signed), from the free states (ua, pa), (ub, pb) (distinct p; (0, 0)
+    is the flat membrane) by ``_rational_root`` through the last two, each new state a ``_shot`` (a
+    secant crept up on the concave p(u) near the pressure maximum: 5-7 shots where this takes 1-4).
+    NaN when not found."""
     aim = target + 0.3 * cover
-    m = us.shape[0]
-    pu, pp = np.empty(m + 8), np.empty(m + 8)
-    pu[:m], pp[:m] = us, ps
-    for k in range(m, m + 8):
-        u = _extrapolate(pp, pu, k, aim, 3)
+    for _ in range(8):
+        u = _rational_root(ua, pa, ub, pb, aim)
         if not (math.isfinite(u) and u != 0.0):
             break
         p, d, th, moved = _shot(lambda0 + u * u, lambda0, n, abs(aim))
@@ -106,7 +118,7 @@ def end_node(target, cover, lambda0, n, us, ps):
                 p, d, th = free_at_stretch(lambda0 + u * u, lambda0, n, abs(p))
                 p, d = math.copysign(p, u), math.copysign(d, u)
             return u, p, d, th
-        pu[k], pp[k] = u, p
+        ua, pa, ub, pb = ub, pb, u, p
     return math.nan, math.nan, math.nan, math.nan
 
 
