@@ -76,11 +76,15 @@ class Control:
         lo, hi = int(np.argmin(p)), int(np.argmax(p))
         if not p[hi] - p[lo] > 1e-9:
             return None
-        ends = self._node_ends(p[lo], p[hi]) or self._solved_ends(p, lo, hi)
-        if ends is None:
-            return None
         rows = np.argsort(p)[(CHECK_AT * (len(p) - 1)).astype(int)]
-        return checked_curve(p, ends, self.lambda0, rows, CHECK_MARGIN * D0_CHECK, D0_CHECK, self.n)
+
+        def curve(ends):
+            if ends is None:
+                return None
+            return checked_curve(p, ends, self.lambda0, rows, CHECK_MARGIN * D0_CHECK, D0_CHECK, self.n)
+        d0 = curve(self._node_ends(p[lo], p[hi]))
+        # else the ends solved at the extreme pressures (an end node past the pressure maximum, say)
+        return d0 if d0 is not None else curve(self._solved_ends(p, lo, hi))
 
     def _node_ends(self, p_lo: float, p_hi: float) -> list | None:
         """Free states just beyond the rows' pressures (by ``END_COVER`` of their range at most:
