@@ -136,11 +136,13 @@ def curve(t, f, th):
     """The interpolant of f(t) through nodes t (both decreasing; ``th`` their clamp angles, < pi/2):
     barycentric weights w, the Lobatto points tc of [t[-1], t[0]], the values fc there, and the
     truncation estimate (in t) of the roots of f(t) = p (``tail_bound``). ok False when a node is not
-    finite or not Case I, or t, f or fc is not strictly decreasing."""
+    finite or not Case I (0 <= theta < pi/2 and, the meridian convex, |t| <= tan(theta) with the sign of
+    f: a free-inflation node t = d0 at p = f), or t, f or fc is not strictly decreasing."""
     n = t.shape[0]
     ok = True
     for j in range(n):
-        ok = ok and math.isfinite(t[j]) and math.isfinite(f[j]) and th[j] < 0.5 * math.pi
+        ok = ok and math.isfinite(t[j]) and math.isfinite(f[j]) and 0.0 <= th[j] < 0.5 * math.pi
+        ok = ok and abs(t[j]) <= math.tan(th[j]) and t[j] * f[j] >= 0.0
         if j > 0:
             ok = ok and t[j] < t[j - 1] and f[j] < f[j - 1]
     tc, fc = np.empty(n), np.empty(n)
