@@ -42,13 +42,14 @@ import numpy as np
 from adhfit.exact.control import prepare
 from adhfit.exact.history import exact_history
 from adhfit.exact.inflation import free_inflation
+from adhfit.exact.state import DEFAULT_N
 mode, repeat = sys.argv[1], int(sys.argv[2])
 
 def hist(lam, d, w, slip):
     return exact_history("pressure", slip, d=d, w=w, rs=0.5, lambda0=lam, a_max=0.25, points=200)
 
 def ctrl(lam, d, w, slip):
-    return prepare("pressure", slip, None, d, w, 0.5, lam, 0.25, None, None, 200, 12)
+    return prepare("pressure", slip, None, d, w, 0.5, lam, 0.25, None, None, 200, DEFAULT_N)
 
 out = {}
 if mode == "time":

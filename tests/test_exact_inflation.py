@@ -13,7 +13,7 @@ import pytest
 
 from adhfit.exact.inflation import free_inflation
 from adhfit.exact.solve import solve_state
-from adhfit.exact.state import Config
+from adhfit.exact.state import DEFAULT_N, Config
 from tests import exact_reference as ref
 
 
@@ -171,7 +171,7 @@ def test_scaled_d0_curve_matches_direct_solves(lambda0, lo, hi):
     assert np.max(np.abs(d0 - direct)) <= D0_CHECK
     # one node by the scaling symmetry: the state at its own pressure is the directly solved one
     lc = free_inflation(0.5 * (lo + hi), lambda0).lc
-    q, d, theta = scaled.free_at_stretch(lc, lambda0, 12, 1.1 * abs(0.5 * (lo + hi)))
+    q, d, theta = scaled.free_at_stretch(lc, lambda0, DEFAULT_N, 1.1 * abs(0.5 * (lo + hi)))
     st = free_inflation(q, lambda0)
     assert (d, theta, lc) == pytest.approx((st.d, st.theta_end, st.lc), abs=1e-11)
 
@@ -183,7 +183,7 @@ def test_pressure_control_d0_from_the_touching_state(lambda0, d, lo, hi):
     pressures from the free state at the gap d (``scaled.end_node``), d0 within 1e-10 of free inflation
     solved at each pressure by the bracketing root search."""
     from adhfit.exact.control import D0_CHECK, prepare
-    c = prepare("pressure", "frictionless", None, d, 0.2, 0.5, lambda0, 0.25, None, None, 200, 12)
+    c = prepare("pressure", "frictionless", None, d, 0.2, 0.5, lambda0, 0.25, None, None, 200, DEFAULT_N)
     assert lo < c.free.p < hi
     p = np.concatenate([np.linspace(lo, hi, 60), [c.free.p]])
     ends = c._node_ends(lo, hi)  # found from the free state (not the fallback of solves at lo, hi)
