@@ -13,7 +13,7 @@ import pytest
 
 from adhfit.exact.inflation import free_inflation
 from adhfit.exact.solve import solve_state
-from adhfit.exact.state import Config
+from adhfit.exact.state import DEFAULT_N, Config
 from tests import exact_reference as ref
 
 
@@ -153,3 +153,45 @@ def test_free_state_at_a_gap(d, lambda0):
     d0_ref, lc_ref = ref.free_inflation(abs(st.p), lambda0)
     assert math.copysign(d0_ref, d) == pytest.approx(d, abs=1e-9)
     assert st.lc == pytest.approx(lc_ref, rel=1e-9)
+
+
+@pytest.mark.parametrize("lambda0, lo, hi", [(1.1, -0.64, 0.27), (1.2, -0.25, 0.82), (1.5, 0.2, 0.94),
+                                             (2.0, -0.25, 0.72), (3.0, -0.12, 0.987)])
+def test_scaled_d0_curve_matches_direct_solves(lambda0, lo, hi):
+    """The pressure-control d0(p) (nodes by the scaling symmetry, p interpolated in d0, ``checked_curve``)
+    against free inflation solved at each pressure by the bracketing root search (no start from the
+    curve): within control.D0_CHECK = 1e-10 on every row. Ranges through p = 0 (at lambda0 = 1.1 wide
+    enough that 20 nodes are off by 2e-9 and the curve is refined) and up to the pressure maximum."""
+    from adhfit.exact import scaled
+    from adhfit.exact.control import CHECK_MARGIN, D0_CHECK
+    from adhfit.exact.inflation import checked_curve
+    p = np.linspace(lo, hi, 61)
+    ends = [free_inflation(hi, lambda0), free_inflation(lo, lambda0)]
+    direct = np.array([free_inflation(q, lambda0).d for q in p])
+    d0 = checked_curve(p, ends, lambda0, np.array([3, 15, 30, 45, 57]), CHECK_MARGIN * D0_CHECK, D0_CHECK)
+    assert d0 is not None  # each of these passes its checks (else this test would check nothing)
+    assert np.max(np.abs(d0 - direct)) <= D0_CHECK
+    # one node by the scaling symmetry: the state at its own pressure is the directly solved one
+    lc = free_inflation(0.5 * (lo + hi), lambda0).lc
+    q, d, theta = scaled.free_at_stretch(lc, lambda0, DEFAULT_N, 1.1 * abs(0.5 * (lo + hi)))
+    st = free_inflation(q, lambda0)
+    assert (d, theta, lc) == pytest.approx((st.d, st.theta_end, st.lc), abs=1e-11)
+
+
+@pytest.mark.parametrize("lambda0, d, lo, hi", [(1.1, -0.05, -0.64, 0.27), (1.5, 0.2, 0.2, 0.94),
+                                                (3.0, 0.2, -0.12, 0.987)])
+def test_pressure_control_d0_from_the_touching_state(lambda0, d, lo, hi):
+    """``Control._d0_curve`` as a history calls it: the curve's ends found as nodes beyond the rows'
+    pressures from the free state at the gap d (``scaled.end_node``), d0 within 1e-10 of free inflation
+    solved at each pressure by the bracketing root search."""
+    from adhfit.exact.control import D0_CHECK, prepare
+    c = prepare("pressure", "frictionless", None, d, 0.2, 0.5, lambda0, 0.25, None, None, 200, DEFAULT_N)
+    assert lo < c.free.p < hi
+    p = np.concatenate([np.linspace(lo, hi, 60), [c.free.p]])
+    ends = c._node_ends(lo, hi)  # found from the free state (not the fallback of solves at lo, hi)
+    assert ends is not None and ends[0].p >= hi and ends[1].p <= lo
+    d0 = c._d0_curve(p)
+    assert d0 is not None
+    direct = np.array([free_inflation(q, lambda0).d for q in p])
+    assert np.max(np.abs(d0 - direct)) <= D0_CHECK
+    assert d0[-1] == pytest.approx(c.free.d, abs=D0_CHECK)

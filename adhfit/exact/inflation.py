@@ -10,12 +10,13 @@ from ..errors import ConvergenceError
 from . import chebyshev as CH
 from . import kernels as K
 from . import newton as N
+from . import scaled as S
 from .state import DEFAULT_N, Config, State, evaluate
 
-__all__ = ["free_inflation", "apex_deflection", "free_curve"]
+__all__ = ["free_inflation", "apex_deflection", "free_curve", "checked_curve"]
 
-D0_NODES = 20  # apex stretches of free_curve (d0 to ~5e-12 when p changes sign, ~3e-14 otherwise; 16
-# nodes left 8e-10 through p = 0 at lambda0 = 1.1, over the accepted 1e-10 of control.D0_CHECK)
+D0_NODES = 20  # apex stretches of free_curve (d0 to <~3e-11 on 50 pressure-control histories at lambda0 =
+# 1.1-3, w up to 1, of which 8 refined to 39 nodes by checked_curve; 16 nodes: 23 refined, 18: 14)
 
 
 def free_inflation(p: float, lambda0: float, n: int = DEFAULT_N, lc_guess: float | None = None,
@@ -117,11 +118,12 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
                nodes: int = D0_NODES, with_stretch: bool = False):
     """d0(p) at many pressures from free inflation at ``nodes`` apex stretches only.
 
-    Parametrized by u = sign(p) sqrt(lc - lambda0) (lc the apex stretch), in which p and d0 are smooth
-    from p = 0 through the pressure maximum of free inflation (d0(p) itself has a square-root branch
-    point there, so a polynomial in p would converge slowly): p(u) and d0(u) are interpolated on
-    Chebyshev points between the ends (``chebyshev``), and p(u) = p is inverted by Newton on the
-    interpolant.
+    The nodes lie at the Chebyshev points of u = sign(p) sqrt(lc - lambda0) (lc the apex stretch)
+    between the ends (which are nodes); each other node is one shot and a few Runge-Kutta steps
+    (``scaled.free_at_stretches``: the scaling symmetry of the membrane equations). p is interpolated
+    as a polynomial in d0 through them (smooth from p = 0 through the pressure maximum of free
+    inflation, where d0(p) itself has a square-root branch point, so a polynomial in p would converge
+    slowly; see ``_Curve`` for why not in u), and p(d0) = p is inverted by Newton (``chebyshev``).
 
     Parameters
     ----------
@@ -142,18 +144,96 @@ def free_curve(p: np.ndarray, ends: list, lambda0: float, n: int = DEFAULT_N,
         d0 at each p (with ``with_stretch``: the tuple (d0, lc)); None where a node fails or leaves
         Case I (the caller solves each p instead).
     """
-    u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
-    u = 0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * np.cos(np.pi * np.arange(nodes) / (nodes - 1))
-    out = N.free_at_stretches(u, lambda0, 1.0 / lambda0, n, ends[0].p)
-    if not (np.all(np.isfinite(out)) and np.all(out[2] < 0.5 * math.pi)):
+    crv = _Curve.build(ends, lambda0, n, nodes)
+    got = None if crv is None else crv.at(np.asarray(p, dtype=float))
+    if got is None:
         return None
-    pn, dn = out[0], np.sign(u) * out[1]
-    if not np.all(np.diff(pn) < 0.0):
-        return None
-    x0 = (np.interp(p, pn[::-1], u[::-1]) - 0.5 * (u_lo + u_hi)) / (0.5 * (u_hi - u_lo))
-    d0, x = CH.invert(pn, dn, np.asarray(p, dtype=float), x0)
-    if not np.all(np.isfinite(d0)):
-        return None
-    if not with_stretch:
-        return d0
-    return d0, lambda0 + (0.5 * (u_lo + u_hi) + 0.5 * (u_hi - u_lo) * x) ** 2
+    return got if with_stretch else got[0]
+
+
+def checked_curve(p: np.ndarray, ends: list, lambda0: float, rows: np.ndarray, tol: float, est: float,
+                  n: int = DEFAULT_N) -> np.ndarray | None:
+    """``free_curve``'s d0 at the pressures p, checked at the rows ``rows``: free inflation at each such
+    row's interpolated apex stretch (``scaled.free_at_points``: one shot and a Newton in the material
+    coordinate, a state independent of the interpolant, at a pressure within ~1e-8 of the row's)
+    against the interpolant at that state's own pressure; and the interpolant's truncation estimate
+    (its last Chebyshev coefficients over the least slope: above the error on 50 histories, by 1-30x)
+    must not exceed ``est``. With ``D0_NODES`` nodes first, then twice the intervals
+    (``_Curve.refine``: wide ranges, e.g. p = -0.64 .. 0.27 at lambda0 = 1.1). None when both fail."""
+    crv = _Curve.build(ends, lambda0, n, D0_NODES)
+    p = np.asarray(p, dtype=float)
+    for refined in (False, True):
+        got = crv.at(p, stretch=False) if crv is not None and crv.est <= est else None
+        if got is not None and _passes(crv, p[rows], crv.stretch(got[0][rows]), tol, n):
+            return got[0]
+        crv = None if crv is None or refined else crv.refine(n)
+    return None
+
+
+def _passes(crv, p, lc, tol, n):
+    """Whether free inflation at the apex stretches lc (near the pressures p) agrees with the curve."""
+    chk = S.free_at_points(lc, np.abs(p), crv.lambda0, n)
+    sgn = np.sign(p)
+    got = crv.at(sgn * chk[0], stretch=False)  # (NaN where a check failed: no roots)
+    return got is not None and bool(np.all(np.abs(got[0] - sgn * chk[1]) <= tol)
+                                    and np.all(chk[2] < 0.5 * math.pi))
+
+
+class _Curve:
+    """d0(p) from free inflation at the Chebyshev points of u = sign(p) sqrt(lc - lambda0): p
+    interpolated in t = d0 through the nodes' own d0 (barycentric form), resampled on the Lobatto points
+    of t for ``chebyshev.invert`` (the same polynomial). In t, not u: the nodes are exact states of the
+    discrete model, but its p at a given apex stretch carries a discretization part that does not
+    vanish with p like p^2 (relative error ~1e-11/u^2 at n = 12): p(u) and d0(u) are rough at ~1e-11
+    near u = 0, together, so d0(p) of a u-interpolant through p = 0 stopped at ~3e-11 for any number of
+    nodes (1e-10 at lambda0 = 3), where p(d0) reaches ~1e-14."""
+
+    def __init__(self, u_lo, u_hi, lambda0, nodes):
+        self.lambda0 = lambda0
+        self.mid, self.half = 0.5 * (u_lo + u_hi), 0.5 * (u_hi - u_lo)
+        self.x = np.cos(np.pi * np.arange(nodes) / (nodes - 1))
+        self.u = self.mid + self.half * self.x
+        self.pn = self.dn = self.th = self.w = self.pc = self.tc = np.zeros(nodes)
+        self.est = math.inf  # the truncation estimate of its d0 (``chebyshev.tail_bound``)
+
+    @classmethod
+    def build(cls, ends, lambda0, n, nodes):
+        """From free inflation at the ends (max p, min p) and ``nodes`` - 2 nodes between (None: a
+        node failed, left Case I, or p or d0 is not monotonic in u)."""
+        u_hi, u_lo = (math.copysign(math.sqrt(max(st.lc - lambda0, 0.0)), st.p) for st in ends)
+        crv = cls(u_lo, u_hi, lambda0, nodes)
+        known = np.full((3, nodes), np.nan)
+        for j, st in ((0, ends[0]), (nodes - 1, ends[1])):
+            known[:, j] = st.p, abs(st.d), abs(st.theta_end)
+        return crv._solve(known, np.full(nodes, np.nan), n)
+
+    def refine(self, n):
+        """The curve on twice the intervals: the Lobatto points of 2N - 1 nodes hold those of N, the
+        new ones solved from p(u) of this curve's nodes there (one shot each)."""
+        m = self.pn.shape[0]
+        crv = _Curve(self.mid - self.half, self.mid + self.half, self.lambda0, 2 * m - 1)
+        known = np.full((3, 2 * m - 1), np.nan)
+        known[:, ::2] = self.pn, np.abs(self.dn), self.th
+        pred = np.full(2 * m - 1, np.nan)
+        cp = CH.coefficients(self.pn)
+        for j in range(1, 2 * m - 1, 2):
+            pred[j] = abs(CH.clenshaw(cp, crv.x[j]))
+        return crv._solve(known, pred, n)
+
+    def _solve(self, known, pred, n):
+        out = S.free_at_stretches(self.u, self.lambda0, n, known, pred)
+        self.pn, self.dn, self.th = out[0], np.sign(self.u) * out[1], out[2]
+        self.w, self.tc, self.pc, self.est, ok = CH.curve(self.dn, self.pn, self.th)
+        return self if ok else None
+
+    def at(self, p, stretch=True):
+        """(d0, lc) at the pressures p (lc None without ``stretch``; None: Newton on the interpolant
+        failed somewhere)."""
+        d0, ok = CH.roots(self.tc, self.pc, p)
+        if not ok:
+            return None
+        return d0, (self.stretch(d0) if stretch else None)
+
+    def stretch(self, d0):
+        """The apex stretch at the apex deflections d0 (u interpolated in d0 through the nodes)."""
+        return self.lambda0 + CH.bary_eval(self.dn, self.w, self.u, d0) ** 2
