@@ -195,3 +195,19 @@ def test_pressure_control_d0_from_the_touching_state(lambda0, d, lo, hi):
     direct = np.array([free_inflation(q, lambda0).d for q in p])
     assert np.max(np.abs(d0 - direct)) <= D0_CHECK
     assert d0[-1] == pytest.approx(c.free.d, abs=D0_CHECK)
+
+
+@pytest.mark.parametrize("lambda0, d", [(1.775, 0.2178), (1.1, 0.1), (2.5, 0.1), (1.3, -0.05)])
+def test_case_one_limit_between_direct_solves(lambda0, d):
+    """The largest |p| with a Case I free state (``control.case_one_limit``, from scaled shots along the
+    branch) against the bracketing solver of ``free_inflation``: a Case I state 1 % below it, none 1 %
+    above (closer in, the bracketing solver can step over the two roots near the limit)."""
+    from adhfit.errors import ConvergenceError
+    from adhfit.exact.control import case_one_limit, prepare
+    c = prepare("pressure", "frictionless", None, d, 0.2, 0.5, lambda0, 0.25, None, None, 200, DEFAULT_N)
+    limit = case_one_limit(c.lambda0, c.n, c.free)
+    assert limit is not None and 0.5 < limit < 1.01
+    st = free_inflation(0.99 * limit, lambda0)
+    assert 0.0 < st.theta_end < 0.5 * math.pi
+    with pytest.raises(ConvergenceError):
+        free_inflation(1.01 * limit, lambda0)

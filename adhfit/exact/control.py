@@ -72,8 +72,36 @@ class Control:
         p = np.array([st.p for st in states], dtype=float)
         d0 = self._d0_curve(p)
         if d0 is None:
-            d0 = np.array([self.delta(_AtP(q, 0.0)) for q in p])
+            d0 = self._d0_below_limit(p)
+        if d0 is None:
+            d0 = self._d0_rows(p, np.ones(p.shape, dtype=bool), np.full(p.shape, np.nan))
         return d0 - d
+
+    def _d0_rows(self, p: np.ndarray, which: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """One free-inflation solve per row of ``which``, in order of |p| (past the first |p| without a
+        Case I state the rest are NaN unsolved: ``_beyond``); ``out`` filled in and returned."""
+        for i in sorted(np.flatnonzero(which), key=lambda k: abs(p[k])):
+            out[i] = self.delta(_AtP(float(p[i]), 0.0))
+        return out
+
+    def _d0_below_limit(self, p: np.ndarray) -> np.ndarray | None:
+        """d0 when the rows' pressures reach past the largest |p| with a Case I free state (the loading
+        pressed on beyond it, the membrane held by the substrate): that limit from the free-inflation
+        branch (``case_one_limit``), the curve over the rows below it, NaN above; None when the rows
+        stay below it (or it cannot be found), i.e. the curve failed for another reason."""
+        q = np.abs(p)
+        limit = case_one_limit(self.lambda0, self.n, self.free)
+        if limit is None or not q.max() > limit:
+            return None
+        out = np.full(p.shape, np.nan)
+        below = q <= limit
+        if np.count_nonzero(below) >= MIN_CURVE_ROWS:
+            d0 = self._d0_curve(p[below])
+            if d0 is not None:
+                out[below] = d0
+                below = np.zeros(p.shape, dtype=bool)
+        self._beyond = min(self._beyond, limit * (1.0 + LIMIT_TOL))
+        return self._d0_rows(p, below | ((q > limit) & (q < limit * (1.0 + LIMIT_TOL))), out)
 
     def _d0_curve(self, p: np.ndarray) -> np.ndarray | None:
         """d0 at the pressures p from ``checked_curve`` if it passes the checks, else None."""
@@ -149,6 +177,40 @@ CHECK_MARGIN = 0.25  # the checks accept a quarter of D0_CHECK: the rows checked
 
 
 END_COVER = 0.01  # the interpolated range of p reaches past the rows' by at most this part of theirs
+
+
+MIN_CURVE_ROWS = 12  # fewer rows below the Case I limit are solved one by one
+LIMIT_TOL = 1e-6  # relative bracket of the Case I limit: rows within it are solved one by one
+LIMIT_GROW = 1.15  # steps in the apex-stretch variable u while bracketing the Case I limit
+
+
+def case_one_limit(lambda0: float, n: int, free: State) -> float | None:
+    """The largest |p| at which free inflation has a Case I state (0 < theta_end < pi/2 on the branch
+    rising from the flat membrane): along the branch in u = sqrt(lc - lambda0) (one scaled shot a
+    state, ``scaled.free_at_stretch``) from the touching state ``free`` outwards until theta_end
+    reaches pi/2 or p stops rising, then bisection in u to ``LIMIT_TOL``. None when ``free`` is flat or
+    no state is found."""
+    u = math.sqrt(max(free.lc - lambda0, 0.0))
+    if not u > 0.0:
+        return None
+    good, p_good, bad = u, abs(free.p), None
+    for _ in range(60):  # bracket: the first u whose state leaves Case I or lies past the pressure maximum
+        nxt = good * LIMIT_GROW
+        p, _, th = S.free_at_stretch(lambda0 + nxt * nxt, lambda0, n, p_good)
+        if not (math.isfinite(p) and th < 0.5 * math.pi and p > p_good):
+            bad = nxt
+            break
+        good, p_good = nxt, p
+    if bad is None:
+        return None
+    while bad - good > LIMIT_TOL * good:
+        mid = 0.5 * (good + bad)
+        p, _, th = S.free_at_stretch(lambda0 + mid * mid, lambda0, n, p_good)
+        if math.isfinite(p) and th < 0.5 * math.pi and p > p_good:
+            good, p_good = mid, p
+        else:
+            bad = mid
+    return p_good
 
 
 def _node_state(u: float, p: float, d: float, theta: float, lambda0: float) -> State:
