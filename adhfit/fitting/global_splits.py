@@ -2,18 +2,15 @@
 (step 4 of :mod:`.global_fit`)."""
 from __future__ import annotations
 
-import numpy as np
 
-from .model import CurveModel, ModelDomainError, Segments
+from .model import CurveModel, ModelDomainError
 from .series import Member, radius_prediction
 
 __all__ = ["check_splits"]
 
 
 def _fixed(curve, scene, slip, points, seg, j):
-    f = np.asarray(curve.force, float)
-    return CurveModel(curve, scene, slip, points=points, fixed_split=True,
-                      segments=Segments(n=seg.n, i_turn=seg.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1]))))
+    return CurveModel(curve, scene, slip, points=points, fixed_split=True, segments=seg.split_before(j, curve.force))
 
 
 def _block_cost(m, sub) -> float:

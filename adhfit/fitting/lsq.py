@@ -32,7 +32,7 @@ import lmfit
 import numpy as np
 
 from ..params import FITTED
-from .model import OFFSET_NAME, CurveModel, ModelDomainError, Segments
+from .model import OFFSET_NAME, CurveModel, ModelDomainError
 from .starts import Start, data_start, noise_estimate
 
 __all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise"]
@@ -298,7 +298,7 @@ def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start
 def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict) -> RawFit:
     """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
     m, par, f = raw.model, raw.par, raw.model.force
-    seg = Segments(n=m.segments.n, i_turn=m.segments.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
+    seg = m.segments.split_before(j, f)
     fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True,
                        membrane=m.membrane)
     fixed.n_histories, fixed.n_evaluations = m.n_histories, m.n_evaluations  # the cost of stage 1 too

@@ -15,7 +15,7 @@ import math
 from ..errors import AdhfitError, ConvergenceError
 from .lsq import RawFit, minimise, residual_function
 from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
-from .model import CurveModel, ModelDomainError, Segments
+from .model import CurveModel, ModelDomainError
 from .starts import Start, noise_estimate
 
 __all__ = ["choose_and_refit", "exact_refit", "wants_profile", "effect_warning"]
@@ -115,10 +115,9 @@ def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given:
 
 def _split_fit(exact: CurveModel, j: int, best, residual_args: tuple, sigma_given: bool, tried: list):
     """The exact fit with the detachment fixed before row ``j``, from ``best``'s parameters."""
-    par, seg, f = residual_args[0], exact.segments, exact.force
+    par = residual_args[0]
     model = CurveModel(exact.curve, exact.scene, exact.slip, points=exact.points, fixed_split=True,
-                       segments=Segments(n=seg.n, i_turn=seg.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1]))),
-                       membrane="exact")
+                       segments=exact.segments.split_before(j, exact.force), membrane="exact")
     model.n_histories, model.n_evaluations = exact.n_histories, exact.n_evaluations
     res = minimise(residual_function(model, *residual_args), best.params, scale_covar=not sigma_given,
                    max_nfev=MAX_NFEV, tol=EXACT_TOL)

@@ -63,6 +63,11 @@ class Segments:
         """Boolean mask of the rows after the jump (free membrane)."""
         return self._mask(self.n if self.i_jump is None else self.i_jump, self.n)
 
+    def split_before(self, j: int, force: np.ndarray) -> Segments:
+        """The same curve with the detachment fixed before row ``j`` (the jump: the force step there)."""
+        f = np.asarray(force, float)
+        return Segments(n=self.n, i_turn=self.i_turn, i_jump=j, jump=float(abs(f[j] - f[j - 1])))
+
     def as_dict(self) -> dict:
         return {"i_turn": self.i_turn, "i_jump": self.i_jump, "jump": self.jump,
                 "n_loading": int(self.loading.sum()), "n_attached": int(self.attached.sum()),
