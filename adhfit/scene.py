@@ -17,14 +17,13 @@ from typing import Any, Mapping
 import numpy as np
 
 from .errors import DataError, InputError
-from .params import A_MAX_OVER_RS, DIMENSIONLESS, FITTED
+from .params import A_MAX_OVER_RS, CONTROLS, DIMENSIONLESS, FITTED, MEMBRANE_CHOICES, SLIP_CHOICES
 from .units import DIMENSIONS, GROUPS, Scales, parse_quantity
 
 __all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMBRANE_MODELS", "LAYOUT", "PRIOR_DISTS"]
 
-CONTROLS = ("displacement", "pressure")
-SLIPS = ("auto", "no-slip", "frictionless")
-MEMBRANE_MODELS = ("auto", "large-stretch", "exact")  # of a fit (docs/contracts.md A6)
+SLIPS = SLIP_CHOICES
+MEMBRANE_MODELS = MEMBRANE_CHOICES  # of a fit (docs/contracts.md A6)
 
 #: TOML layout (docs/contracts.md A3): section -> key -> (Scene field, dimension or None for a word).
 LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {

@@ -80,7 +80,9 @@ def _fit(path: Path, scene, method: str, seed: int) -> dict:
     from adhfit.fitting import fit_curve  # noqa: PLC0415
     if method == "lsq":
         return fit_curve(str(path), scene, slip="auto").as_dict()
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc  # noqa: PLC0415
+    from functools import partial  # noqa: PLC0415
+    from adhfit.fitting.api import fit  # noqa: PLC0415
+    fit_curve_mcmc = partial(fit, method="mcmc")
     return fit_curve_mcmc(str(path), scene, slip="auto", seed=seed, workers=1, progress=False,
                           **MCMC_SETTINGS).as_dict()
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from adhfit.errors import DataError, InputError
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.fitting.lsq import fit_slip
 from adhfit.fitting.membrane_choice import approximation_effect
 from adhfit.fitting.model import CurveModel

@@ -146,7 +146,9 @@ def test_seeded_runs_repeat_and_hdf5(tmp_path):
 
 @pytest.fixture(scope="module")
 def small_fit(tmp_path_factory):
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc
+    from functools import partial  # noqa: PLC0415
+    from adhfit.fitting.api import fit  # noqa: PLC0415
+    fit_curve_mcmc = partial(fit, method="mcmc")
     from adhfit.fitting.synthetic import synthetic_curve
     from adhfit.scene import Scene
     LsScene = functools.partial(Scene, membrane_model="large-stretch")
@@ -229,7 +231,9 @@ def test_outputs_and_human_report(small_fit):
 
 def test_two_processes_give_the_same_posterior(small_fit, tmp_path):
     """workers=2 samples each slip condition in its own forked process: same seeds, same chains."""
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc
+    from functools import partial  # noqa: PLC0415
+    from adhfit.fitting.api import fit  # noqa: PLC0415
+    fit_curve_mcmc = partial(fit, method="mcmc")
     res, _, _ = small_fit
     two = fit_curve_mcmc(res.curve, _scene(), seed=11, outdir=tmp_path, workers=2, progress=False, n_walkers=6,
                          n_ensembles=2, tune_steps=10, max_steps=15, evidence_draws=60, predictive_draws=8)

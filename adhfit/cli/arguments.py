@@ -9,10 +9,8 @@ import argparse
 from pathlib import Path
 
 from ..errors import InputError
-from ..fitting.options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
-
-#: ``--membrane`` choices (adhfit.scene.MEMBRANE_MODELS; repeated here to keep the parser's imports light)
-MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
+from ..fitting.options import DEFAULT_POINTS
+from ..params import MEMBRANE_CHOICES, METHODS, SLIP_CHOICES
 
 __all__ = ["add_fit_arguments", "read_options", "fit_x_offset", "fit_force_offset", "MEMBRANE_CHOICES"]
 

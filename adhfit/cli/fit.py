@@ -44,8 +44,8 @@ def _fit_one(args, painter, engine) -> int:
     """One curve: read, fit (least squares or MCMC), write the reports, print the summary."""
     from . import batch  # noqa: PLC0415
     from ..data import read_curve  # noqa: PLC0415
-    from ..fitting.fit import fit_curve  # noqa: F401, PLC0415 - lmfit loads while the kernels load (thread)
-    from ..fitting.api import fit  # noqa: PLC0415
+    from ..fitting.api import fit  # noqa: PLC0415 - lmfit loads while the kernels load (thread)
+    from ..fitting import stage  # noqa: F401, PLC0415
     from ..report import write  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415

@@ -18,7 +18,8 @@ from .membrane_choice import EXACT_POINTS, Effect, approximation_effect, decide
 from .model import CurveModel, ModelDomainError
 from .starts import Start, noise_estimate
 
-__all__ = ["choose_and_refit", "exact_refit", "wants_profile", "effect_warning"]
+__all__ = ["choose_and_refit", "choose_members", "exact_refit", "wants_profile", "effect_warning", "membrane_evidence",
+           "MEMBRANE_DBIC"]
 
 #: trust-region evaluations allowed to an exact refinement (each new parameter set is one history)
 MAX_NFEV = 60
@@ -200,21 +201,56 @@ def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str
             f"use --membrane exact to remove it.")
 
 
-def wants_profile(raw: RawFit, model: dict) -> bool:
-    """Whether the reported fit needs likelihood profiles: always with the large-stretch membrane
-    (cheap); with the exact one when the covariance is missing or wide (standard error of ln W_ad or
-    ln μh above :data:`MAX_COVARIANCE_SE`), when the data end before pull-off (W_ad is then bounded from
-    one side) or when the optimum sits on the kink at the turning point (docs/numerics.md B4)."""
-    if model["membrane"] != "exact" or raw.best.covar is None:
+def choose_members(raws: dict[str, list[RawFit]], scenes: list, membrane: str) -> tuple[dict, dict, list]:
+    """:func:`choose_and_refit` for every curve of an objective: one membrane model for all of them.
+
+    Each curve is decided on its own (its large-stretch fits, its λ0); when one needs the exact membrane,
+    every curve is refitted with it (one model for the shared W_ad and μh).
+
+    Returns
+    -------
+    (raws, model, effects)
+        Per slip condition the fits to use (one per curve), the report's ``model`` entry, and each
+        curve's :class:`~.membrane_choice.Effect` per slip condition.
+    """
+    slips = list(raws)
+    n = len(scenes)
+    per = [choose_and_refit({s: raws[s][i] for s in slips}, scenes[i], membrane) for i in range(n)]
+    exact = [k for k, (_, info, _) in enumerate(per) if info["membrane"] == "exact"]
+    out = {s: [] for s in slips}
+    for i, (fits, info, effects) in enumerate(per):
+        if exact and info["membrane"] != "exact":
+            fits = {s: exact_refit(raws[s][i], effects.get(s)) for s in slips}
+        for s in slips:
+            out[s].append(fits[s])
+    info = dict(per[exact[0] if exact else 0][1])
+    if n > 1:
+        which = exact[0] if exact else 0
+        info["why"] = (f"one membrane model for the {n} curves; curve {which + 1} ({scenes[which].source or 'scene'}): "
+                       + info["why"])
+        if exact:
+            info["membrane"] = "exact"
+    return out, info, [p[2] for p in per]
+
+
+def wants_profile(fit, model: dict) -> bool:
+    """Whether the reported fit (an :class:`~.objective.ObjectiveFit`) needs likelihood profiles: always
+    with the large-stretch membrane (cheap); with the exact one when the covariance is missing or wide
+    (standard error of ln W_ad or ln μh above :data:`MAX_COVARIANCE_SE`), when the data end before
+    pull-off (W_ad is then bounded from one side) or when the optimum sits on the kink at the turning
+    point (docs/numerics.md B4)."""
+    from .intervals import no_pull_off  # noqa: PLC0415
+    if model["membrane"] != "exact" or fit.best.covar is None:
         return True
     for name in ("ln_work_of_adhesion", "ln_mu_h"):  # a wide or missing covariance interval is not trusted
-        se = raw.best.params[name].stderr
+        se = fit.best.params[name].stderr
         if se is None or not math.isfinite(se) or se > MAX_COVARIANCE_SE:
             return True
-    si = raw.par.si(raw.best.params)
+    shared, offs = fit.si()
     try:
-        return (raw.model.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"]) is None  # no pull-off
-                or raw.model.near_turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"]))
+        return no_pull_off(fit) or any(
+            m.model.near_turning_point(shared["work_of_adhesion"], shared["mu_h"], off["x_offset"])
+            for m, off in zip(fit.members, offs))
     except ModelDomainError:
         return True
 
@@ -224,12 +260,8 @@ def wants_profile(raw: RawFit, model: dict) -> bool:
 MEMBRANE_DBIC = 6.0
 
 
-def membrane_evidence(large: dict[str, RawFit], exact: dict[str, RawFit]) -> float:
+def membrane_evidence(large: dict, exact: dict) -> float:
     """ΔBIC = BIC(large-stretch) − BIC(exact) of each model's best slip condition (positive: the data
-    prefer the exact membrane).  Both models have the same parameters, so ΔBIC is the χ² difference in
-    units of the noise variance (given, or estimated from the better fit)."""
-    best_ls = min(large.values(), key=lambda r: r.best.chisqr)
-    best_ex = min(exact.values(), key=lambda r: r.best.chisqr)
-    better = min(best_ls, best_ex, key=lambda r: r.best.chisqr)
-    s2 = 1.0 if better.sigma_given else better.best.chisqr / max(better.best.nfree, 1)
-    return float((best_ls.best.chisqr - best_ex.best.chisqr) / s2) if s2 > 0 else 0.0
+    prefer the exact membrane); both are dicts slip -> :class:`~.objective.ObjectiveFit`.  Both models
+    have the same parameters, so ΔBIC is the difference of -2 ln L with every noise level profiled out."""
+    return float(min(f.criteria()[1] for f in large.values()) - min(f.criteria()[1] for f in exact.values()))
