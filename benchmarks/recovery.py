@@ -77,7 +77,7 @@ def plan(args) -> list[dict]:
 
 
 def _fit(path: Path, scene, method: str, seed: int) -> dict:
-    from adhfit.fitting import fit_curve  # noqa: PLC0415
+    from adhfit.fitting import fit as fit_curve  # noqa: PLC0415
     if method == "lsq":
         return fit_curve(str(path), scene, slip="auto").as_dict()
     from functools import partial  # noqa: PLC0415

@@ -193,10 +193,12 @@ def test_same_residual_as_least_squares(small_fit):
     assert tg_names[:2] == ["work_of_adhesion", "mu_h"]
     model = CurveModel(res.curve, _scene(), "no-slip")
     raw = fit_slip(model)
+    from adhfit.fitting.objective import ObjectiveFit
     from adhfit.fitting.posterior import default_priors
-    tg = Target(model, raw.par, default_priors(raw.par, [raw.par.si(raw.best.params)], {}), None)
+    pri = default_priors(raw.par, [raw.par.si(raw.best.params)], {})
+    tg = Target(ObjectiveFit.from_single(raw), list(raw.par.names), [pri[n] for n in raw.par.names])
     theta = ch.flat[0]
-    r = tg.residual(theta) * tg.scale
+    r = tg.residual(theta) * raw.scale
     rss, n = float(r @ r), r.size
     num, _ = integrate.quad(lambda ls: math.exp(-n * ls - 0.5 * rss * math.exp(-2 * ls)
                                                 - 0.5 * n * math.log(2 * math.pi) + 0.5 * n * math.log(rss)),

@@ -12,7 +12,7 @@ import time
 
 from ..params import DIMENSIONLESS
 from .checks import curve_entries, curve_warnings, plot_data
-from .membrane_fit import effect_warning
+from .membrane import effect_warning
 from .objective import ObjectiveFit
 from .result import Estimate, FitResult, SlipFit
 from .summary import summarize

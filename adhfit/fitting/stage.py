@@ -4,7 +4,7 @@ Per slip condition:
 
 1. **each curve alone** (:func:`~.lsq.fit_slip`): data-based starts, the free then fixed row split
    (the pull-off row found by likelihood), the other condition's optimum as one more start;
-2. **the membrane model** (docs/contracts.md A6, :func:`~.membrane_fit.choose_members`): the exact
+2. **the membrane model** (docs/contracts.md A6, :func:`~.membrane.choose_members`): the exact
    membrane refines the large-stretch fits when asked, or under ``auto`` when the data resolve the
    approximation's error;
 3. **the objective** (:func:`~.joint.objective_fit`): one curve and its force alone is its own fit;
@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from ..params import SLIP_CONDITIONS
 from .joint import objective_fit
 from .lsq import fit_slip
-from .membrane_fit import MEMBRANE_DBIC, choose_members, membrane_evidence, wants_profile
+from .membrane import MEMBRANE_DBIC, choose_members, membrane_evidence, wants_profile
 from .model import CurveModel, segment
 from .selection import compare
 from .summary import summarize
@@ -43,7 +43,7 @@ class Stage:
     model : dict
         report.json ``model``.
     effects : list of dict
-        Per curve, per slip condition: the approximation's :class:`~.membrane_choice.Effect`.
+        Per curve, per slip condition: the approximation's :class:`~.membrane.Effect`.
     singles : dict slip -> list of RawFit
         Each curve's own fit (of the membrane model used).
     large : dict slip -> ObjectiveFit
@@ -95,7 +95,7 @@ def _objectives(problem, singles: dict, segs: list) -> dict:
 
 def _membrane_verdict(large: dict, exact: dict, info: dict) -> tuple[dict, dict, bool]:
     """Under ``auto``, after the exact refit: keep it when the data prefer it (ΔBIC above
-    :data:`~.membrane_fit.MEMBRANE_DBIC`), go back to the large-stretch fit when they prefer that, and
+    :data:`~.membrane.MEMBRANE_DBIC`), go back to the large-stretch fit when they prefer that, and
     otherwise keep the exact fit's values with intervals that also cover the large-stretch fit's."""
     dbic = membrane_evidence(large, exact)
     why = info["why"].rstrip(".")
