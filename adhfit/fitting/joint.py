@@ -23,6 +23,7 @@ import numpy as np
 
 from .intervals import apply_secant
 from .lsq import COARSE_TOL, FINE_TOL, RawFit, minimise
+from .membrane import EXACT_TOL
 from .objective import Block, Member, ObjectiveFit, SharedParametrisation, check_splits, objective_residual, \
     split_blocks
 from .observables import OBSERVABLES, PRIMARY
@@ -84,7 +85,7 @@ def _mean_start(singles: list[RawFit]) -> dict:
     return out
 
 
-def _minimise_starts(residual, spar, starts, offsets):
+def _minimise_starts(residual, spar, starts, offsets, fine: float):
     """Score every shared start by one evaluation, minimise the best two (second coarsely, refined
     only if it wins); returns the best lmfit result."""
     scored = []
@@ -94,9 +95,9 @@ def _minimise_starts(residual, spar, starts, offsets):
     scored.sort(key=lambda t: t[0])
     best = None
     for i, (_, s) in enumerate(scored[:2]):
-        res = minimise(residual, spar.params(s, offsets), scale_covar=False, tol=FINE_TOL if i == 0 else COARSE_TOL)
+        res = minimise(residual, spar.params(s, offsets), scale_covar=False, tol=fine if i == 0 else COARSE_TOL)
         if best is not None and res.chisqr < best.chisqr * (1 - 1e-6):
-            res = minimise(residual, res.params, scale_covar=False, tol=FINE_TOL)
+            res = minimise(residual, res.params, scale_covar=False, tol=fine)
         if best is None or res.chisqr < best.chisqr:
             best = res
     return best
@@ -150,14 +151,17 @@ def objective_fit(slip: str, singles: list[RawFit], curves: list, segs: list, si
         si = r.par.si(r.best.params)
         offsets.append({"x_offset": si["x_offset"], "force_offset": si["force_offset"]})
     starts = [_mean_start(singles)] + [{k: r.par.si(r.best.params)[k] for k in _LN} for r in singles]
-    best = _minimise_starts(objective_residual(members, spar), spar, starts, offsets)
+    # an exact history costs ~10x a large-stretch one: its members start at their own exact optima, and
+    # 1e-5 of χ² is far below what the intervals and the slip comparison need (see .membrane EXACT_TOL)
+    fine = EXACT_TOL if any(m.model.membrane == "exact" for m in members) else FINE_TOL
+    best = _minimise_starts(objective_residual(members, spar), spar, starts, offsets, fine)
     fit = ObjectiveFit(slip, members, spar, best, given, joint=True)
     for _ in range(MAX_REWEIGHT):
         moved = _reweight(members, best)
         moved |= check_splits(fit, segs)
         if not moved:
             break
-        best = minimise(objective_residual(members, spar), best.params, scale_covar=False, tol=FINE_TOL)
+        best = minimise(objective_residual(members, spar), best.params, scale_covar=False, tol=fine)
         fit.best = best
     apply_secant(fit)
     return fit
