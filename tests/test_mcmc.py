@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-from adhfit.fitting.diagnostics import diagnose
+from adhfit.fitting.chains import diagnose
 from adhfit.fitting.mcmc import sample_posterior
 from adhfit.fitting.posterior import Prior
 

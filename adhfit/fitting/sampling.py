@@ -9,7 +9,7 @@
    integrated out; log-uniform priors by default) is sampled by :func:`.mcmc.sample_posterior` (several
    independent ensembles, run length from the autocorrelation time), each condition in a process of
    its own when two cores are there; the chains go to ``OUTDIR/chain.h5``.
-3. **Evidence** by importance sampling from a Student-t fitted to the samples (:mod:`.evidence`); the
+3. **Evidence** by importance sampling from a Student-t fitted to the samples (:mod:`.selection`); the
    posterior model probabilities (equal prior odds) select a condition only when decisive; otherwise the
    reported estimates average the two posteriors with their probabilities as weights.
 4. **Estimates**: posterior median (``value``), sd (``stderr``), 2.5/97.5 percentiles (``ci95``), status
@@ -25,8 +25,8 @@ from typing import Mapping
 import numpy as np
 
 from .assemble import assemble
-from .diagnostics import diagnose
-from .evidence import StudentT, importance_evidence, model_probabilities
+from .chains import diagnose
+from .selection import StudentT, importance_evidence, model_probabilities
 from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
 from .model import OFFSET_NAME, ModelDomainError
 from .posterior import SHARED, Target, checked_covariance, objective_priors
@@ -200,7 +200,7 @@ def _run_jobs(jobs: list, processes: int) -> list[dict]:
         return [job() for job in jobs]
     _JOBS[:] = jobs
     import threading  # noqa: PLC0415
-    from .diagnostics import preload  # noqa: PLC0415
+    from .chains import preload  # noqa: PLC0415
     try:
         with multiprocessing.get_context("fork").Pool(processes) as pool:
             # the parent only waits while the jobs run: it loads the diagnostics' library (arviz, 1-3 s)

@@ -15,7 +15,7 @@ import numpy as np
 from .checks import curve_rows
 from .intervals import estimates, profiles, split_hull
 from .model import ModelDomainError
-from .residual_checks import correlation_factor, widen, zero_drift
+from .checks import correlation_factor, widen, zero_drift
 from .result import SlipFit
 from .starts import noise_estimate
 
@@ -117,7 +117,7 @@ def _curve_warnings(fit, k: int, row: dict, split, factor: float, est: dict) -> 
 
 
 def _drift(fit, k: int, row: dict, split) -> str | None:
-    """The zero-drift warning (:func:`.residual_checks.zero_drift`) from the rows at zero model force."""
+    """The zero-drift warning (:func:`.checks.zero_drift`) from the rows at zero model force."""
     m = fit.members[k].model
     predicted = row["predicted"]
     if split is None or not np.all(np.isfinite(predicted)):
