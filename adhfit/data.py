@@ -26,7 +26,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .errors import DataError, InputError
+from .errors import DataError, InputError, shown
 from .readers import detect_layout
 from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, assign, check_overrides, split_cell
 from .readers.text import Layout, read_lines, split_line
@@ -273,7 +273,7 @@ def _values(table: pd.DataFrame, spec: Assignment, line_no: np.ndarray, decimal:
         if name == "time" and col_bad.size:  # optional: a clock-time column is left out, not an error
             i = int(col_bad[0])
             spec.ignored.append((spec.header[name], f"time not a number (line {line_no[i]}: "
-                                                    f"{table.iloc[i, j]!r})"))
+                                                    f"{shown(table.iloc[i, j])})"))
             for d in (values, spec.index, spec.header, spec.units, spec.factors):
                 d.pop(name)
             continue
@@ -299,14 +299,14 @@ def _describe(cell: str, decimal: str = ".") -> str:
     if not cell.strip():
         return "empty cell"
     if decimal == "," and "." in cell:
-        return f"{cell!r} is not a number (this file writes decimal commas)"
+        return f"{shown(cell)} is not a number (this file writes decimal commas)"
     try:
         value = float(cell.replace(",", ".") if decimal == "," else cell)
     except ValueError:
-        return f"{cell!r} is not a number" + (" (use a decimal point)" if "," in cell else "")
+        return f"{shown(cell)} is not a number" + (" (use a decimal point)" if "," in cell else "")
     if np.isfinite(value):
-        return f"{cell!r} is not a plain decimal number"
-    return f"{cell!r} is not a finite number (NaN and inf are not data)"
+        return f"{shown(cell)} is not a plain decimal number"
+    return f"{shown(cell)} is not a finite number (NaN and inf are not data)"
 
 
 def _check_physics(values: dict[str, np.ndarray], line_no: np.ndarray, col: Mapping[str, str], control: str,

@@ -16,7 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import DataError, InputError
+from .errors import DataError, InputError, shown
 from .params import A_MAX_OVER_RS, DIMENSIONLESS, FITTED
 from .units import DIMENSIONS, GROUPS, Scales, parse_quantity
 
@@ -342,8 +342,8 @@ def load_scene(path: str | Path) -> Scene:
             key = FILE_KEY.get(exc.name, exc.name)
             sec, k = key[1:].split("] ") if key.startswith("[") else (None, None)
         table = doc.get(sec, {}) if sec not in (None, "priors") else {}
-        shown = table.get(k, exc.value) if isinstance(table, dict) else exc.value
-        raise fail(f"{key} must be {exc.valid}, got {shown!r}. {exc.reason}".rstrip(), sec, k) from None
+        given = table.get(k, exc.value) if isinstance(table, dict) else exc.value
+        raise fail(f"{key} must be {exc.valid}, got {shown(given)}. {exc.reason}".rstrip(), sec, k) from None
 
 
 def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:

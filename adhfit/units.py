@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
-from .errors import DataError, InputError
+from .errors import DataError, InputError, clip, shown
 
 if TYPE_CHECKING:
     import pint
@@ -64,7 +64,7 @@ _NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?
 def _fail(message: str, name: str, value: Any, valid: str, where: str | None) -> NoReturn:
     """Raise a DataError (inside a file) or an InputError (a Python argument)."""
     if where is not None:
-        raise DataError(f"{name} must be {valid}, got {value!r}. {message}".rstrip(), path=where)
+        raise DataError(f"{name} must be {valid}, got {shown(value)}. {message}".rstrip(), path=where)
     raise InputError(name, value, valid, message)
 
 
@@ -132,9 +132,9 @@ def parse_quantity(value: Any, dimension: str, *, name: str, where: str | None =
             try:
                 q = _unit_quantity(unit)
             except ValueError as exc:
-                _fail(f"Unit '{unit}' is not understood ({exc}).", name, value, valid, where)
+                _fail(f"Unit '{clip(unit)}' is not understood ({clip(str(exc))}).", name, value, valid, where)
             if not q.check(dim):
-                _fail(f"Unit '{unit}' is not {noun}.", name, value, valid, where)
+                _fail(f"Unit '{clip(unit)}' is not {noun}.", name, value, valid, where)
             si = number * float(q.to_base_units().magnitude)
         elif dimension == "dimensionless" or math.isinf(number):
             si = number
@@ -173,18 +173,18 @@ def unit_factor(unit: str, dimension: str, *, name: str, where: str | None = Non
     try:
         q = _unit_quantity(unit)
     except ValueError as exc:
-        msg = f"unit '{unit}' is not understood ({exc}); expected {noun} such as '{example.split()[-1]}'"
+        msg = f"unit '{clip(unit)}' is not understood ({clip(str(exc))}); expected {noun} such as '{example.split()[-1]}'"
         if where is not None:
             raise DataError(msg, path=where, column=name) from None
         raise InputError(name, unit, f"a unit of {noun}", msg) from None
     if not q.check(dim):
-        msg = f"unit {unit} is not {noun} (e.g. '{example.split()[-1]}')"
+        msg = f"unit {clip(unit)} is not {noun} (e.g. '{example.split()[-1]}')"
         if where is not None:
             raise DataError(msg, path=where, column=name)
         raise InputError(name, unit, f"a unit of {noun}", msg)
     factor = float(q.to_base_units().magnitude)
     if not (math.isfinite(factor) and factor > 0.0):
-        msg = f"unit '{unit}' gives a scale factor of {factor!r}"
+        msg = f"unit '{clip(unit)}' gives a scale factor of {factor!r}"
         if where is not None:
             raise DataError(msg, path=where, column=name)
         raise InputError(name, unit, "a unit with a finite positive scale", msg)
