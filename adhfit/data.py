@@ -26,10 +26,10 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .errors import DataError, InputError, shown
-from .readers import detect_layout
+from .errors import DataError, InputError, clip, shown
 from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, assign, check_overrides, split_cell
-from .readers.text import Layout, read_lines, split_line
+from .readers.formats import SNIFF_BYTES, Format, find_format
+from .readers.text import Layout, Table, read_bytes, split_line
 
 __all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
 
@@ -166,15 +166,15 @@ class Curve:
 
 def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | None = None,
                units: Mapping[str, str] | None = None, force_sign: str | None = None,
-               displacement_sign: str | None = None) -> Curve:
+               displacement_sign: str | None = None, sheet: str | None = None) -> Curve:
     """Read a measured curve (docs/contracts.md A4, A4b).
 
     Parameters
     ----------
     path : str or Path
-        Text file: CSV (``,`` ``;`` or tab, decimal point or comma, UTF-8 with or without BOM,
-        UTF-16 with BOM, Latin-1), an instrument export with metadata and a units row, or a LabVIEW
-        ``.lvm`` file.
+        A file of any format in :data:`adhfit.readers.FORMATS`: delimited text (``,`` ``;`` or tab,
+        decimal point or comma, UTF-8 with or without BOM, UTF-16 with BOM, Latin-1), an instrument
+        export with metadata and a units row, a LabVIEW measurement file or an Excel workbook.
     control : {"displacement", "pressure"}
         The test's control mode, which decides the required columns.
     columns : mapping, optional
@@ -185,6 +185,9 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
         The file's force sign convention (default compressive-positive, adhfit's).
     displacement_sign : {"into-substrate-positive", "away-positive"}, optional
         The file's displacement sign convention (default into-substrate-positive, adhfit's).
+    sheet : str, optional
+        A workbook's sheet holding the curve; by default the one sheet whose header has the columns
+        ``control`` needs.
 
     Returns
     -------
@@ -206,32 +209,81 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
     if control not in REQUIRED:
         raise InputError("control", control, "one of 'displacement', 'pressure'")
     check_overrides(control, columns, units, force_sign, displacement_sign)
+    if sheet is not None and (not isinstance(sheet, str) or not sheet):
+        raise InputError("sheet", sheet, "a sheet's name (a non-empty string)")
     where = str(path)
-    raw, lines, encoding = read_lines(path, where)
-    layout = detect_layout(lines, where, lvm=Path(path).suffix.lower() == ".lvm")
-    header = split_line(lines[layout.header_no - 1], layout.sep)
-    spec = assign(header, control, where=where, header_no=layout.header_no,
-                  units_row=None if layout.units_no is None else split_line(lines[layout.units_no - 1], layout.sep),
-                  units_no=layout.units_no, file_units=layout.units, time_columns=layout.time_columns,
-                  columns=columns, units=units)
-    table = _table(lines, layout, header, spec, where)
+    raw = read_bytes(path, where)
+    fmt = find_format(path, raw[:SNIFF_BYTES])
+    tables = fmt.tables(raw, where)
+    source, layout, header, spec = _choose(tables, fmt, control, sheet, columns, units, where)
+    lines = source.lines
+    table = _table(lines, layout, header, spec, source.where)
     if len(layout.rows) < MIN_ROWS:
         raise DataError(f"only {len(layout.rows)} data rows; at least {MIN_ROWS} are needed (loading, then "
-                        "unloading)", path=where)
+                        "unloading)", path=source.where)
     line_no = np.array(layout.rows, dtype=int)
-    values = _values(table, spec, line_no, layout.decimal, where)
+    values = _values(table, spec, line_no, layout.decimal, source.where)
     signs = {"force": force_sign == "tensile-positive", control: displacement_sign == "away-positive"}
     values = {k: -v if signs.get(k) else v for k, v in values.items()}
     x = values[control]
-    _check_physics(values, line_no, spec.header, control, where)
+    _check_physics(values, line_no, spec.header, control, source.where)
     signs_given = {"force sign": force_sign, "displacement sign": displacement_sign}
-    notes = [layout.description, encoding, *spec.inferred.values(),
+    notes = [layout.description, source.note, *spec.inferred.values(),
              *(f"{k} {v}" for k, v in signs_given.items() if v)]
     return Curve(path=where, control=control, x=x, force=values["force"], line=line_no,
                  i_turn=int(np.argmax(x)), time=values.get("time"),
                  contact_radius=values.get("contact_radius"), excluded=tuple(sorted(layout.excluded)),
                  sha256=hashlib.sha256(raw).hexdigest(), units=spec.units, ignored_columns=tuple(spec.ignored),
                  columns=spec.header, layout=", ".join(n for n in notes if n))
+
+
+def _header(source: Table, fmt: Format, control: str, columns: Mapping[str, str] | None,
+            units: Mapping[str, str] | None) -> tuple[Layout, list[str], Assignment]:
+    """A table's layout, header cells and column assignment (any of them may raise DataError)."""
+    lines = source.lines
+    layout = fmt.layout(lines, source.where)
+    header = split_line(lines[layout.header_no - 1], layout.sep)
+    spec = assign(header, control, where=source.where, header_no=layout.header_no,
+                  units_row=None if layout.units_no is None else split_line(lines[layout.units_no - 1], layout.sep),
+                  units_no=layout.units_no, file_units=layout.units, time_columns=layout.time_columns,
+                  columns=columns, units=units)
+    return layout, header, spec
+
+
+def _choose(tables: list[Table], fmt: Format, control: str, sheet: str | None,
+            columns: Mapping[str, str] | None, units: Mapping[str, str] | None, where: str
+            ) -> tuple[Table, Layout, list[str], Assignment]:
+    """The one table (sheet) holding the curve: the one named ``sheet``, else the only one whose
+    header has the columns ``control`` needs; several or none is a one-line error naming the sheets."""
+    names = [t.sheet for t in tables if t.sheet is not None]
+    if sheet is not None:
+        if not names:
+            raise InputError("sheet", sheet, "given for a workbook (.xlsx) only",
+                             f"{clip(where)} is read as {fmt.name}, which has no sheets.")
+        tables = [t for t in tables if t.sheet == sheet]
+        if not tables:
+            raise InputError("sheet", sheet, "one of " + ", ".join(shown(n, 40) for n in names),
+                             f"{clip(where)} has no sheet of that name.")
+    if len(tables) == 1:
+        return (tables[0], *_header(tables[0], fmt, control, columns, units))
+    found, failed = [], []
+    for source in tables:
+        try:
+            found.append((source, *_header(source, fmt, control, columns, units)))
+        except DataError as exc:
+            reason = str(exc).removeprefix(source.where).lstrip(":, ")
+            failed.append(f"sheet {shown(source.sheet, 40)}, {clip(reason, 160)}")
+    if len(found) == 1:
+        return found[0]
+    if not found:
+        raise DataError(f"no sheet holds the columns of a curve under {control} control ("
+                        + "; ".join(failed[:4]) + (f"; and {len(failed) - 4} more sheets" if len(failed) > 4 else "")
+                        + "); name the sheet with the curve (Python: read_curve(..., sheet=NAME)) to see its "
+                        "error in full", path=where)
+    both = ", ".join(shown(s.sheet, 40) for s, *_ in found[:6]) + (f" and {len(found) - 6} more" if len(found) > 6 else "")
+    raise DataError(f"{len(found)} sheets hold the columns of a curve ({both}); adhfit reads one curve per "
+                    "file: choose one with sheet=NAME (Python: read_curve(..., sheet=...)), or save each sheet "
+                    "to its own file", path=where)
 
 
 def _table(lines: list[str], layout: Layout, header: list[str], spec: Assignment, where: str) -> pd.DataFrame:
