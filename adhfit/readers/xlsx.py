@@ -2,8 +2,9 @@
 
 Testing software (Instron Bluehill, ZwickRoell testXpert, ...) saves results as workbooks laid out
 like its CSV exports: metadata rows above the header, units in the header cells or in a units row
-under it.  Each sheet is read with pandas (engine openpyxl, cached values of formulas) and written
-as tab-separated lines, one per sheet row, so row ``n`` of the sheet is line ``n`` in every
+under it.  Each sheet is read with openpyxl (read-only, the cached values of formulas; pandas'
+``read_excel`` would turn an error cell such as ``#DIV/0!`` into an empty one) and written as
+tab-separated lines, one per sheet row, so row ``n`` of the sheet is line ``n`` in every
 message, and the text layout rules (:mod:`.text`) then find its header, units row and data.  Cells
 that are numbers are written exactly (``repr`` of the float); text cells keep their text, with
 line breaks inside a cell made spaces.  Which sheet holds the curve is decided by
@@ -43,16 +44,24 @@ def _cell(value: Any) -> str:
     return " ".join(str(value).splitlines())
 
 
+def _rows(ws: Any) -> list[list[Any]]:
+    """A read-only worksheet's rows from row 1 (missing rows empty), whatever dimension it declares."""
+    ws.reset_dimensions()  # a wrong <dimension> tag would otherwise cut the rows read
+    return [list(row) for row in ws.iter_rows(values_only=True)]
+
+
 def _lines(rows: list[list[Any]]) -> list[str]:
-    """Sheet rows -> tab-separated lines (quoted where a cell holds a tab or a quote), trailing
-    empty cells dropped."""
+    """Sheet rows -> tab-separated lines (quoted where a cell holds a tab or a quote), all as wide as
+    the widest filled row (so an empty data cell stays an empty cell), trailing empty rows dropped."""
+    cells = [[_cell(v) for v in row] for row in rows]
+    width = max((max((j + 1 for j, c in enumerate(row) if c), default=0) for row in cells), default=0)
+    while cells and not any(cells[-1]):
+        cells.pop()
     out = []
-    for row in rows:
-        cells = [_cell(v) for v in row]
-        while cells and not cells[-1]:
-            cells.pop()
+    for row in cells:
+        row = (row + [""] * width)[:width]
         buf = io.StringIO()
-        csv.writer(buf, delimiter="\t", lineterminator="").writerow(cells)
+        csv.writer(buf, delimiter="\t", lineterminator="").writerow(row)
         out.append(buf.getvalue())
     return out
 
@@ -95,17 +104,22 @@ def workbook_tables(raw: bytes, where: str) -> list[Table]:
         too long to be data (:data:`~adhfit.readers.text.MAX_LINE_CHARS`).
     """
     _check_zip(raw, where)
-    import pandas as pd  # noqa: PLC0415 - pandas loads with the reader, as in adhfit.data
     try:
-        sheets = pd.read_excel(io.BytesIO(raw), sheet_name=None, header=None, dtype=object, engine="openpyxl")
+        import openpyxl  # noqa: PLC0415 - loads only when a workbook is read
     except ImportError:
         raise DataError("reading .xlsx needs the openpyxl package (pip install openpyxl), or save the sheet "
                         "as CSV", path=where) from None
+    try:
+        book = openpyxl.load_workbook(io.BytesIO(raw), read_only=True, data_only=True)
+        try:
+            sheets = {ws.title: _rows(ws) for ws in book.worksheets}
+        finally:
+            book.close()
     except Exception as exc:  # noqa: BLE001 - openpyxl raises many types for a damaged workbook
         raise DataError(f"not a readable Excel workbook ({type(exc).__name__}: {clip(str(exc))})", path=where) from None
     tables = []
-    for name, frame in sheets.items():
-        lines = _lines(frame.values.tolist())
+    for name, rows in sheets.items():
+        lines = _lines(rows)
         if not any(lines):
             continue
         here = f"{where}, sheet '{name}'"
