@@ -38,7 +38,10 @@ def shown(value: Any, limit: int = ECHO_LIMIT) -> str:
     >>> shown("x" * 1000, limit=20)
     "'xxxxxxxxxxxxxxxxx…' (1000 characters)"
     """
-    text = repr(value)
+    try:
+        text = repr(value)
+    except RecursionError:  # a 1,000-deep table from a TOML file
+        return f"<a {type(value).__name__} nested too deeply to show>"
     if len(text) <= limit:
         return text
     size = f" ({len(value)} characters)" if isinstance(value, (str, bytes)) else ""
