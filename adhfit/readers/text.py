@@ -116,9 +116,9 @@ def decode(raw: bytes, where: str) -> tuple[list[str], str]:
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
         text, encoding = raw.decode("utf-16", errors="replace"), "UTF-16"
     elif b"\x00" in raw[:65536]:
-        raise DataError("a binary file, not a text export (it holds NUL bytes); adhfit reads delimited "
-                        "text (.csv, .tsv, .txt), LabVIEW .lvm and Excel .xlsx: export the curve as one of "
-                        "these", path=where)
+        raise DataError("a binary file, not a text export (it holds NUL bytes; or UTF-16 text without a "
+                        "byte-order mark); adhfit reads delimited text, LabVIEW .lvm and Excel .xlsx: export the "
+                        "curve as CSV (UTF-8) or .xlsx", path=where)
     else:
         try:
             text, encoding = raw.decode("utf-8-sig"), "UTF-8" + (" with BOM" if raw[:3] == b"\xef\xbb\xbf" else "")
