@@ -51,7 +51,7 @@ class Curve:
     Attributes
     ----------
     path : str
-        The CSV file.
+        The curve file (a workbook's sheet is named in :attr:`layout`).
     control : {"displacement", "pressure"}
         Which variable the test drives.
     x : ndarray

@@ -282,7 +282,7 @@ def normalize_priors(priors: Mapping[str, Any], *, prefix: str = "priors") -> di
         label = f"{prefix}.{name}"
         if name not in _PRIOR_DIMENSION:
             raise InputError(label, spec, "a prior of a fitted parameter: " + ", ".join(_PRIOR_DIMENSION),
-                             f"Unknown parameter '{name}';{_suggest(name, _PRIOR_DIMENSION)}".rstrip(";"))
+                             f"Unknown parameter '{clip(str(name))}';{_suggest(name, _PRIOR_DIMENSION)}".rstrip(";"))
         dist = spec.get("dist") if isinstance(spec, Mapping) else None
         if dist not in PRIOR_DISTS:
             raise InputError(label, spec, "a table with dist = " + " | ".join(map(repr, PRIOR_DISTS)) +
@@ -357,7 +357,8 @@ def load_scene(path: str | Path) -> Scene:
             sec, k = key[1:].split("] ") if key.startswith("[") else (None, None)
         table = doc.get(sec, {}) if sec not in (None, "priors") else {}
         given = table.get(k, exc.value) if isinstance(table, dict) else exc.value
-        raise fail(f"{key} must be {exc.valid}, got {shown(given)}. {exc.reason}".rstrip(), sec, k) from None
+        raise fail(f"{clip(key)} must be {clip(exc.valid, 300)}, got {shown(given)}. {clip(exc.reason, 300)}".rstrip(),
+                   sec, k) from None
 
 
 def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:
@@ -368,17 +369,17 @@ def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:
         if section not in LAYOUT and section != "priors":
             if not isinstance(table, dict):
                 owner = " or ".join(f"[{s}]" for s, keys in LAYOUT.items() if section in keys)
-                raise fail(f"key '{section}' is outside any section; " + (
+                raise fail(f"key '{clip(section)}' is outside any section; " + (
                     f"it belongs in {owner}." if owner else f"known sections: {sections}"), None, section)
             hint = _suggest(section, [*LAYOUT, "priors"])
-            raise fail(f"unknown section [{section}];{hint} Known sections: {sections}.", section)
+            raise fail(f"unknown section [{clip(section)}];{hint} Known sections: {sections}.", section)
         if not isinstance(table, dict):
             raise fail(f"[{section}] must be a table (a '[{section}]' header and keys)", None, section)
         for key, value in table.items():
             if section == "priors":
                 continue
             if key not in LAYOUT[section]:
-                raise fail(f"[{section}] unknown key '{key}';{_suggest(key, LAYOUT[section])} Known keys: "
+                raise fail(f"[{section}] unknown key '{clip(key)}';{_suggest(key, LAYOUT[section])} Known keys: "
                            f"{', '.join(LAYOUT[section])}.", section, key)
             raw[LAYOUT[section][key][0]] = value
     _check_plain_lengths(raw, fail)

@@ -181,6 +181,14 @@ def test_a_megabyte_scene_value_is_cut(tmp_path):
     assert "k" * 200 not in msg
 
 
+@pytest.mark.parametrize("extra", ["[" + "s" * 500_000 + "]\nx = 1\n", "k" * 500_000 + " = 1\n",
+                                   "[priors]\n" + "p" * 500_000 + " = {dist = 'uniform', min = 0, max = 1}\n"])
+def test_a_long_section_key_or_prior_name_is_cut(tmp_path, extra):
+    text = SCENE.replace("control =", extra + "control =") if extra.startswith("k") else SCENE + extra
+    msg = _refused(lambda: load_scene(_scene(tmp_path, text)), "500000 characters")
+    assert "k" * 200 not in msg and "s" * 200 not in msg and "p" * 200 not in msg
+
+
 def test_a_huge_scene_file_is_refused(tmp_path):
     path = _scene(tmp_path, SCENE + "# " + "x" * 2_000_000 + "\n")
     _refused(lambda: load_scene(path), "is this the scene file")
