@@ -26,10 +26,11 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .errors import DataError, InputError, clip, shown
-from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, assign, check_overrides, split_cell
-from .readers.formats import SNIFF_BYTES, Format, find_format
-from .readers.text import Layout, Table, read_bytes, split_line
+from .errors import DataError, InputError, shown
+from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, check_overrides, split_cell
+from .readers.formats import SNIFF_BYTES, find_format
+from .readers.tables import locate
+from .readers.text import Layout, read_bytes
 
 __all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
 
@@ -209,13 +210,12 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
     if control not in REQUIRED:
         raise InputError("control", control, "one of 'displacement', 'pressure'")
     check_overrides(control, columns, units, force_sign, displacement_sign)
-    if sheet is not None and (not isinstance(sheet, str) or not sheet):
-        raise InputError("sheet", sheet, "a sheet's name (a non-empty string)")
     where = str(path)
     raw = read_bytes(path, where)
     fmt = find_format(path, raw[:SNIFF_BYTES])
     tables = fmt.tables(raw, where)
-    source, layout, header, spec = _choose(tables, fmt, control, sheet, columns, units, where)
+    source, layout, header, spec = locate(tables, fmt, control, sheet=sheet, columns=columns, units=units,
+                                          where=where)
     lines = source.lines
     table = _table(lines, layout, header, spec, source.where)
     if len(layout.rows) < MIN_ROWS:
@@ -235,55 +235,6 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
                  contact_radius=values.get("contact_radius"), excluded=tuple(sorted(layout.excluded)),
                  sha256=hashlib.sha256(raw).hexdigest(), units=spec.units, ignored_columns=tuple(spec.ignored),
                  columns=spec.header, layout=", ".join(n for n in notes if n))
-
-
-def _header(source: Table, fmt: Format, control: str, columns: Mapping[str, str] | None,
-            units: Mapping[str, str] | None) -> tuple[Layout, list[str], Assignment]:
-    """A table's layout, header cells and column assignment (any of them may raise DataError)."""
-    lines = source.lines
-    layout = fmt.layout(lines, source.where)
-    header = split_line(lines[layout.header_no - 1], layout.sep)
-    spec = assign(header, control, where=source.where, header_no=layout.header_no,
-                  units_row=None if layout.units_no is None else split_line(lines[layout.units_no - 1], layout.sep),
-                  units_no=layout.units_no, file_units=layout.units, time_columns=layout.time_columns,
-                  columns=columns, units=units)
-    return layout, header, spec
-
-
-def _choose(tables: list[Table], fmt: Format, control: str, sheet: str | None,
-            columns: Mapping[str, str] | None, units: Mapping[str, str] | None, where: str
-            ) -> tuple[Table, Layout, list[str], Assignment]:
-    """The one table (sheet) holding the curve: the one named ``sheet``, else the only one whose
-    header has the columns ``control`` needs; several or none is a one-line error naming the sheets."""
-    names = [t.sheet for t in tables if t.sheet is not None]
-    if sheet is not None:
-        if not names:
-            raise InputError("sheet", sheet, "given for a workbook (.xlsx) only",
-                             f"{clip(where)} is read as {fmt.name}, which has no sheets.")
-        tables = [t for t in tables if t.sheet == sheet]
-        if not tables:
-            raise InputError("sheet", sheet, "one of " + ", ".join(shown(n, 40) for n in names),
-                             f"{clip(where)} has no sheet of that name.")
-    if len(tables) == 1:
-        return (tables[0], *_header(tables[0], fmt, control, columns, units))
-    found, failed = [], []
-    for source in tables:
-        try:
-            found.append((source, *_header(source, fmt, control, columns, units)))
-        except DataError as exc:
-            reason = str(exc).removeprefix(source.where).lstrip(":, ")
-            failed.append(f"sheet {shown(source.sheet, 40)}, {clip(reason, 160)}")
-    if len(found) == 1:
-        return found[0]
-    if not found:
-        raise DataError(f"no sheet holds the columns of a curve under {control} control ("
-                        + "; ".join(failed[:4]) + (f"; and {len(failed) - 4} more sheets" if len(failed) > 4 else "")
-                        + "); name the sheet with the curve (Python: read_curve(..., sheet=NAME)) to see its "
-                        "error in full", path=where)
-    both = ", ".join(shown(s.sheet, 40) for s, *_ in found[:6]) + (f" and {len(found) - 6} more" if len(found) > 6 else "")
-    raise DataError(f"{len(found)} sheets hold the columns of a curve ({both}); adhfit reads one curve per "
-                    "file: choose one with sheet=NAME (Python: read_curve(..., sheet=...)), or save each sheet "
-                    "to its own file", path=where)
 
 
 def _table(lines: list[str], layout: Layout, header: list[str], spec: Assignment, where: str) -> pd.DataFrame:

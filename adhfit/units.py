@@ -197,7 +197,8 @@ def unit_factor(unit: str, dimension: str, *, name: str, where: str | None = Non
     try:
         q = _unit_quantity(unit)
     except ValueError as exc:
-        msg = f"unit '{clip(unit)}' is not understood ({clip(str(exc))}); expected {noun} such as '{example.split()[-1]}'"
+        msg = (f"unit '{clip(unit)}' is not understood ({clip(str(exc))}); expected {noun} such as "
+               f"'{example.split()[-1]}'")
         if where is not None:
             raise DataError(msg, path=where, column=name) from None
         raise InputError(name, unit, f"a unit of {noun}", msg) from None

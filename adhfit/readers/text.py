@@ -21,8 +21,8 @@ from ..errors import DataError
 from ..units import is_unit
 from .columns import role_of, split_cell
 
-__all__ = ["Layout", "Table", "MAX_LINE_CHARS", "read_bytes", "decode", "read_lines", "text_layout", "is_lvm", "split_line",
-           "is_number", "check_line_lengths"]
+__all__ = ["Layout", "Table", "MAX_LINE_CHARS", "read_bytes", "decode", "read_lines", "text_layout", "is_lvm",
+           "split_line", "is_number", "check_line_lengths"]
 
 #: Lines used to find the layout (the header of any real export is far above this).
 _SNIFF_LINES = 2000
