@@ -15,7 +15,6 @@ import pytest
 from adhfit.data import read_curve
 from adhfit.errors import DataError, InputError
 from adhfit.readers import FORMATS, Format, find_format, folder_patterns
-from adhfit.readers.formats import SNIFF_BYTES
 from adhfit.readers.text import Table, decode, text_layout
 
 openpyxl = pytest.importorskip("openpyxl")
@@ -204,5 +203,15 @@ def test_a_zip_that_is_not_a_workbook(tmp_path):
         read_curve(path, "displacement")
 
 
-def test_sniff_sees_only_the_head():
-    assert SNIFF_BYTES >= 64
+def test_a_workbook_of_empty_sheets(tmp_path):
+    path = _book(tmp_path / "empty.xlsx", {"Sheet1": [], "Sheet2": [[None, None]]})
+    with pytest.raises(DataError, match=r"the workbook's sheets are empty \('Sheet1', 'Sheet2'\)"):
+        read_curve(path, "displacement")
+
+
+def test_a_sheet_with_an_empty_data_cell_names_its_row(tmp_path):
+    rows = _data_rows()
+    rows[9][1] = None
+    path = _book(tmp_path / "gap.xlsx", {"Data": rows})
+    with pytest.raises(DataError, match=r"sheet 'Data', line 10, column 'Extension': empty cell"):
+        read_curve(path, "displacement")
