@@ -140,6 +140,18 @@ def test_units_in_the_header_cells_and_no_metadata(tmp_path):
     np.testing.assert_allclose(c.force, F_N * 1e-3)
 
 
+def test_header_cells_with_line_breaks_and_clock_times(tmp_path):
+    """Excel headers often wrap the unit onto a second line of the cell ('Load\n(N)'); a time column
+    formatted as a clock time is optional, so it is left out and listed."""
+    import datetime as dt
+    rows = [["Time", "Extension\n(mm)", "Load\r\n(N)"]]
+    rows += [[dt.time(0, 0, i), float(x), float(f)] for i, (x, f) in enumerate(zip(X_MM, F_N))]
+    c = read_curve(_book(tmp_path / "wrapped.xlsx", {"Data": rows}), "displacement")
+    assert c.columns == {"displacement": "Extension (mm)", "force": "Load (N)"}
+    assert c.time is None and c.ignored_columns[0][0] == "Time"
+    np.testing.assert_allclose(c.force, F_N)
+
+
 def test_an_xlsx_named_csv_is_still_a_workbook(tmp_path):
     path = _book(tmp_path / "export.xlsx", {"Data": _data_rows()})
     renamed = path.rename(tmp_path / "export.csv")
