@@ -47,6 +47,9 @@ def summary_text(result, out: Path) -> str:
     shown = dict(d.get("parameters", {}))
     for name, e in shown.items():
         lines.append(estimate_line(name, e))
+    for w in d.get("warnings", []) or []:  # a fit that did not converge is said on the command line too
+        if w.startswith(("The fit did not converge", "MCMC NOT CONVERGED")):
+            lines.append(f"WARNING: {w}")
     n_warn = len(d.get("warnings", []) or [])
     lines.append(f"{n_warn} warning(s); {d.get('model_evaluations')} model evaluations, "
                  f"{result.wall_time:.1f} s; wrote {out}/report.json, report.md, report.html"

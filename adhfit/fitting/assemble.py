@@ -69,6 +69,10 @@ def _warnings(problem, stage, rep: SlipFit) -> list[str]:
         notes = [n for n in notes if n]
         out += notes[:1] if notes else ([] if any(stage.effects) else
                                         list(dict.fromkeys(w for sc in problem.scenes for w in sc.warnings())))
+    if not rep.success:  # say so first: every number below is where the optimiser stopped
+        out.insert(0, f"The fit did not converge ({rep.message.rstrip('.')}): the values are where the optimiser "
+                      f"stopped; do not trust them, and refit (another start, --membrane large-stretch, or fewer "
+                      f"rows).")
     out += list(rep.warnings)
     if v["selected"] is None and len(stage.summaries) > 1:
         why, fav = v["explanation"].rstrip("."), v["favoured"]

@@ -21,13 +21,14 @@ import math
 import numpy as np
 from scipy import stats
 
-from .lsq import PENALTY
+from .lsq import PENALTY, minimise
 from .model import ModelDomainError
+from .objective import SIGMA_FLOOR
 from .profile import ProfileLimit, critical_value, one_side
 from .result import Estimate
 
 __all__ = ["INTERNAL", "Z95", "MAX_LOG_SE", "MAX_ROUNDS", "estimates", "secant_covariance", "apply_secant",
-           "no_pull_off", "split_hull", "from_profile"]
+           "no_pull_off", "split_hull", "from_profile", "honest", "ROUGH"]
 
 #: SI name -> internal lmfit name
 INTERNAL = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h", "displacement_offset": "x_offset",
@@ -35,6 +36,9 @@ INTERNAL = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h", "displ
 Z95 = float(stats.norm.ppf(0.975))
 #: standard error of ln W_ad or ln μh above which the covariance says nothing (a factor e^1.5·1.96 ≈ 20)
 MAX_LOG_SE = 1.5
+#: a profile sub-fit that lowers D by less than this is the χ² surface's numerical roughness (noise-free data:
+#: the interpolation error moves χ² at the 1e-5 level), not a better optimum: the covariance interval stands
+ROUGH = 0.1
 #: rounds of the secant step search (:func:`secant_covariance`)
 MAX_ROUNDS = 5
 _SHARED = ("work_of_adhesion", "mu_h")
@@ -154,28 +158,61 @@ def no_pull_off(fit) -> bool:
     return True
 
 
-def _profile(residual, best, name: str, sigma_given: bool, upper_open: bool = False):
+def _profile(residual, best, name: str, sigma_given: bool, upper_open: bool = False, floor: float = 0.0):
     """(lower, upper) profile limits; when one side is open, the other is the one-sided 95 % bound
     (the two-sided 90 % limit).  The upper side goes first: it is the one a test stopped before
     delamination leaves open for W_ad, so the lower side is then computed once, at the right level.
     ``upper_open``: the upper side is open without probing it (:func:`no_pull_off`)."""
+    kw = {"sigma_given": sigma_given, "s2_floor": floor}
     if upper_open:
-        return (one_side(residual, best, name, -1.0, sigma_given=sigma_given, level=0.90),
+        return (one_side(residual, best, name, -1.0, level=0.90, **kw),
                 ProfileLimit(None, 0, False, False, 0, open=True))
-    hi = one_side(residual, best, name, +1.0, sigma_given=sigma_given, level=0.95)
-    lo = one_side(residual, best, name, -1.0, sigma_given=sigma_given, level=0.90 if hi.open else 0.95)
+    hi = one_side(residual, best, name, +1.0, level=0.95, **kw)
+    lo = one_side(residual, best, name, -1.0, level=0.90 if hi.open else 0.95, **kw)
     if lo.open and not hi.open:
-        side = one_side(residual, best, name, +1.0, sigma_given=sigma_given, level=0.90)
+        side = one_side(residual, best, name, +1.0, level=0.90, **kw)
         hi = side if side.bound is not None else hi
     return lo, hi
 
 
-def profiles(fit) -> dict:
-    """Profile limits of W_ad and μh of an objective's optimum."""
+#: refits from a better point a profile found, before its limits are accepted
+PROFILE_RESTARTS = 2
+
+
+def _limits(fit) -> dict:
     tail = no_pull_off(fit)
     residual = fit.residual
+    # σ estimated, one block: the residual is in units of the largest force, and the model's precision
+    # (the history's interpolation, ~1e-5 of it) floors the noise the profile steps are judged by
+    floor = 0.0 if fit.sigma_given else (SIGMA_FLOOR * fit.members[0].par.f_scale / fit.members[0].sigma_f) ** 2
     return {name: _profile(residual, fit.best, INTERNAL[name], fit.sigma_given,
-                           upper_open=tail and name == "work_of_adhesion") for name in _SHARED}
+                           upper_open=tail and name == "work_of_adhesion", floor=floor) for name in _SHARED}
+
+
+def profiles(fit) -> dict:
+    """Profile limits of W_ad and μh of an objective's optimum.
+
+    A profile sub-fit that ends below the optimum's χ² (by :data:`ROUGH` units of D or more) shows that
+    the optimiser had stopped short (at the kink of the turning point, typically): the fit is restarted
+    from that point, all parameters free, and the profiles are computed again (at most
+    :data:`PROFILE_RESTARTS` times).  The restart replaces the fit's optimum (``fit.restarts`` counts them).
+    """
+    fit.restarts = getattr(fit, "restarts", 0)
+    for _ in range(PROFILE_RESTARTS + 1):
+        limits = _limits(fit)
+        sides = [side for pair in limits.values() for side in pair if side.better and side.gain >= ROUGH]
+        if not sides or fit.restarts >= PROFILE_RESTARTS:
+            return limits
+        start = max(sides, key=lambda side: side.gain).better
+        params = fit.best.params.copy()
+        for k, v in start.items():
+            params[k].value = v
+        res = minimise(fit.residual, params, scale_covar=not fit.sigma_given)
+        if not res.chisqr < fit.best.chisqr:
+            return limits
+        fit.replace_best(res)
+        fit.restarts += 1
+    return limits
 
 
 def _names(fit) -> list[str]:
@@ -204,12 +241,36 @@ def estimates(fit, profile_limits: dict) -> dict[str, Estimate]:
         ci, method = cov_ci, ("covariance" if cov_ci else None)
         status = "determined" if cov_ci else "undetermined"
         prof = profile_limits.get(name)
-        if prof is not None:
+        if prof is not None and cov_ci and any(side.better_optimum and side.gain < ROUGH for side in prof):
+            method = "covariance (the likelihood profile is below the χ² surface's numerical roughness)"
+        elif prof is not None:
             ci, method, status = from_profile(prof, back, ci, method, status)
             if fit.joint and status == "determined" and cov_ci and ci and None not in ci:
                 ci, method = (min(ci[0], cov_ci[0]), max(ci[1], cov_ci[1])), f"{method} ∪ covariance"
-        out[name] = Estimate(name, value, se_int * factor if se_int else None, ci, method, cov_ci, status)
+        out[name] = honest(Estimate(name, value, se_int * factor if se_int else None, ci, method, cov_ci, status))
     return out
+
+
+def _usable(ci, value: float) -> bool:
+    """A two-sided interval with finite ends that is wider than the numbers' own precision."""
+    if ci is None or None in ci or not all(math.isfinite(v) for v in ci):
+        return False
+    return ci[1] - ci[0] > 1e-9 * max(abs(value), abs(ci[0]), abs(ci[1]), 1e-300)
+
+
+def honest(e: Estimate) -> Estimate:
+    """Never a zero-width or non-finite interval called ``determined``: the covariance interval where it is
+    usable, else ``undetermined``; a one-sided bound must be finite."""
+    if e.status == "determined" and not _usable(e.ci95, e.value):
+        if _usable(e.ci95_covariance, e.value):
+            return dataclasses.replace(e, ci95=e.ci95_covariance,
+                                       ci_method=f"covariance (the {e.ci_method} interval had no width)")
+        return dataclasses.replace(e, ci95=None, status="undetermined", ci_method=f"{e.ci_method} (no usable interval)")
+    if e.status in ("lower_bound", "upper_bound"):
+        bound = e.ci95[0] if e.status == "lower_bound" else e.ci95[1]
+        if bound is None or not math.isfinite(bound):
+            return dataclasses.replace(e, ci95=None, status="undetermined")
+    return e
 
 
 def split_hull(fit, est: dict) -> dict:

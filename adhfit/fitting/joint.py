@@ -24,7 +24,7 @@ import numpy as np
 from .intervals import apply_secant
 from .lsq import COARSE_TOL, FINE_TOL, RawFit, minimise
 from .membrane import EXACT_TOL
-from .objective import Block, Member, ObjectiveFit, SharedParametrisation, check_splits, objective_residual, \
+from .objective import SIGMA_FLOOR, Block, Member, ObjectiveFit, SharedParametrisation, check_splits, objective_residual, \
     split_blocks
 from .observables import OBSERVABLES, PRIMARY
 
@@ -33,9 +33,6 @@ __all__ = ["SIGMA_RTOL", "MAX_REWEIGHT", "SIGMA_FLOOR", "objective_fit", "member
 #: stop re-estimating the noise levels when none moves by more than this fraction
 SIGMA_RTOL = 0.02
 MAX_REWEIGHT = 4
-#: least noise level, as a fraction of the largest value of its block: noise-free data must not get an
-#: unbounded weight
-SIGMA_FLOOR = 1e-5
 _LN = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h"}
 
 

@@ -181,6 +181,8 @@ class RawFit:
     alternatives : tuple of dict
         The optima (SI) with the pull-off at a neighbouring row, and their χ² above the best
         (``dchisqr``, residual units): the ones the data cannot reject widen the intervals.
+    won : str
+        Which start (or row split) the optimum came from (for the diagnostics).
     """
 
     slip: str
@@ -191,37 +193,41 @@ class RawFit:
     sigma_given: bool
     starts: list
     alternatives: tuple = ()
+    won: str = ""
 
 
-def _perturbed(start: Start, par: Parametrisation) -> list[Start]:
-    out = [start]
+def _perturbed(start: Start, par: Parametrisation) -> list[tuple[Start, str]]:
+    out = [(start, "data-based start")]
     for fw, fm in ((0.5, 1.0), (2.0, 1.0), (1.0, 0.8), (1.0, 1.25), (0.5, 0.8), (2.0, 1.25)):
-        out.append(Start(start, work_of_adhesion=start["work_of_adhesion"] * fw, mu_h=start["mu_h"] * fm))
+        out.append((Start(start, work_of_adhesion=start["work_of_adhesion"] * fw, mu_h=start["mu_h"] * fm),
+                    f"data-based start, W_ad x{fw:g}, μh x{fm:g}"))
     if par.fit_x_offset:
         for dx in (-0.05, 0.05):
-            out.append(Start(start, x_offset=start["x_offset"] + dx * par.x_scale))
+            out.append((Start(start, x_offset=start["x_offset"] + dx * par.x_scale),
+                        f"data-based start, offset {dx:+.0%} of the control range"))
     return out
 
 
-def _run_starts(residual, par, runs, *, scale_covar):
+def _run_starts(residual, par, runs, *, scale_covar, labels=None):
     """Minimise from every start: the first to full precision, the others coarsely (tolerance
     :data:`COARSE_TOL`), refining one only if it beats the best so far — a start that ends in another
-    basin shows it long before full convergence."""
-    best, starts = None, []
-    for i, s in enumerate(runs):
+    basin shows it long before full convergence.  Returns (best, starts, label of the winning start)."""
+    best, starts, won = None, [], ""
+    labels = labels or [f"start {i}" for i in range(len(runs))]
+    for i, (s, label) in enumerate(zip(runs, labels)):
         res = minimise(residual, par.params(s), scale_covar=scale_covar, tol=FINE_TOL if i == 0 else COARSE_TOL)
         if i > 0 and res.chisqr < best.chisqr * (1.0 - 1e-6):
             res = minimise(residual, res.params, scale_covar=scale_covar, tol=FINE_TOL)
-        starts.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr)})
+        starts.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr), "start": label})
         if best is None or res.chisqr < best.chisqr:
-            best = res
+            best, won = res, label
     if best.aborted or best.covar is None:
         # the optimiser can keep chasing ~1e-9 gains across the kink at the turning point until
         # max_nfev; a short coarse run from its best point ends cleanly and yields the covariance
         polish = minimise(residual, best.params, scale_covar=scale_covar, tol=COARSE_TOL, max_nfev=150)
         if polish.covar is not None and polish.chisqr <= best.chisqr * (1.0 + 1e-6):
             best = polish
-    return best, starts
+    return best, starts, won
 
 
 def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
@@ -258,14 +264,17 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     residual = residual_function(model, par, scale, sigma_est)
     base = data_start(model, fit_offset=fit_x_offset, fit_force_offset=fit_force_offset)
     scored = []
-    for s in _perturbed(base, par):
+    for s, label in _perturbed(base, par):
         r = residual(par.params(s))
-        scored.append((float(r @ r), s))
+        scored.append((float(r @ r), s, label))
     scored.sort(key=lambda t: t[0])
-    runs = [s for _, s in scored[:n_runs]] + [Start(base, **e) for e in extra_starts]
-    best, starts = _run_starts(residual, par, runs, scale_covar=sigma is None)
+    runs = [s for _, s, _ in scored[:n_runs]] + [Start(base, **e) for e in extra_starts]
+    labels = [lb for _, _, lb in scored[:n_runs]] + [e.get("label", "given start") if isinstance(e, dict) else
+                                                    "given start" for e in extra_starts]
+    runs = [Start({k: v for k, v in r.items() if k != "label"}) for r in runs]
+    best, starts, won = _run_starts(residual, par, runs, scale_covar=sigma is None, labels=labels)
     raw = RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
-                 sigma_given=sigma is not None, starts=starts)
+                 sigma_given=sigma is not None, starts=starts, won=won)
     return raw if model.fixed_split else _refit_fixed(raw, sigma, sigma_est, base)
 
 
@@ -285,17 +294,29 @@ def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start
         j = m.split(si["work_of_adhesion"], si["mu_h"], si["x_offset"])
     except ModelDomainError:
         return raw
-    if j is None or j >= m.x.size - 1 or j <= m.segments.i_turn + 1:
+    ok = [k for k in (j, j - 1, j + 1) if k is not None and m.segments.i_turn + 1 < k < m.x.size] \
+        if j is not None and j < m.x.size - 1 else []
+    # a restart a wrong local optimum cannot survive: the row the jump detector finds, and its neighbours
+    # (an optimum stuck with the model detaching rows early had a 1.5-12x higher χ² than the truth)
+    d = m.segments.i_jump
+    seen = set(ok)
+    detected = [k for k in (d, d - 1, d + 1) if k not in seen and m.segments.i_turn + 1 < k < m.x.size] \
+        if d is not None else []
+    if not ok and not detected:
         return raw
-    fits = [_fixed_fit(raw, cand, sigma, sigma_est, base, si) for cand in (j, j - 1, j + 1)
-            if m.segments.i_turn + 1 < cand < m.x.size]  # the free split can stop one row off
+    fits = [_fixed_fit(raw, k, sigma, sigma_est, base, si, "row split of the free-split optimum") for k in ok]
+    fits += [_fixed_fit(raw, k, sigma, sigma_est, base, si, "row split at the detected jump") for k in detected]
     best = min(fits, key=lambda f: f.best.chisqr)
+    if not ok and best.best.chisqr >= raw.best.chisqr:  # the free fit (no pull-off in the data) stands
+        return raw
+    near = [f for f in fits if f is not best and abs(f.model.segments.i_jump - best.model.segments.i_jump) == 1]
     alts = tuple(dict(f.par.si(f.best.params), dchisqr=float(f.best.chisqr - best.best.chisqr),
-                      split=f.model.segments.i_jump) for f in fits if f is not best)
+                      split=f.model.segments.i_jump) for f in near)
     return dataclasses.replace(best, alternatives=alts)
 
 
-def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict) -> RawFit:
+def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict,
+               why: str) -> RawFit:
     """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
     m, par, f = raw.model, raw.par, raw.model.force
     seg = m.segments.split_before(j, f)
@@ -303,6 +324,7 @@ def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base:
                        membrane=m.membrane)
     fixed.n_histories, fixed.n_evaluations = m.n_histories, m.n_evaluations  # the cost of stage 1 too
     residual = residual_function(fixed, par, raw.scale, sigma_est)
-    best, starts = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None)
+    label = f"{raw.won}; {why} (before row {j})"
+    best, starts, won = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None, labels=[label])
     return RawFit(slip=m.slip, best=best, model=fixed, par=par, scale=raw.scale,
-                  sigma_given=raw.sigma_given, starts=raw.starts + starts)
+                  sigma_given=raw.sigma_given, starts=raw.starts + starts, won=won)

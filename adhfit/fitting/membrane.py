@@ -37,7 +37,7 @@ from .starts import Start, noise_estimate
 
 __all__ = ["Effect", "approximation_effect", "decide", "FORCE_THRESHOLD", "SHIFT_THRESHOLD", "EXACT_POINTS",
            "choose_and_refit", "choose_members", "exact_refit", "wants_profile", "effect_warning",
-           "membrane_evidence", "MEMBRANE_DBIC"]
+           "membrane_evidence", "MEMBRANE_DBIC", "shift_text"]
 
 #: largest force error, in units of the noise σ, that ``auto`` accepts from the approximation
 FORCE_THRESHOLD = 0.5
@@ -151,8 +151,8 @@ def decide(effects: dict[str, Effect], lambda0: float, requested: str, outside: 
     e = max(effects.values(), key=lambda x: x.force_error / x.sigma)
     worst = max(effects.values(), key=lambda x: max(abs(v) / (x.se[k] or math.inf) for k, v in x.shift.items()))
     numbers = (f"at λ0 = {lambda0:g} the large-stretch force is off by up to {e.force_error / e.sigma:.2g} σ "
-               f"(σ = {e.sigma:.3g} N) and shifts W_ad by {100 * worst.shift['work_of_adhesion']:+.2g} % and μh by "
-               f"{100 * worst.shift['mu_h']:+.2g} % ({_in_se(worst)})")
+               f"(σ = {e.sigma:.3g} N) and shifts W_ad by {shift_text(worst.shift['work_of_adhesion'])} and μh by "
+               f"{shift_text(worst.shift['mu_h'])} ({_in_se(worst)})")
     resolved = any(x.resolved() for x in effects.values())
     if requested == "auto":
         membrane = "exact" if resolved else "large-stretch"
@@ -162,6 +162,18 @@ def decide(effects: dict[str, Effect], lambda0: float, requested: str, outside: 
         return {"membrane": membrane, "why": f"auto: {numbers}, {rule}."}
     verdict = "the data resolve that" if resolved else "below what the data resolve"
     return {"membrane": requested, "why": f"{requested} requested: {numbers}, {verdict}."}
+
+
+#: a relative shift beyond this is past what the first-order estimate (one refit) can tell
+SHIFT_TEXT_MAX = 0.5
+
+
+def shift_text(x: float) -> str:
+    """A relative shift in words: ``+1.2 %``; beyond ±50 % (a refit far from its start, e.g. of a W_ad the
+    data bound from one side only) the first-order number means nothing and is not printed."""
+    if not math.isfinite(x) or abs(x) > SHIFT_TEXT_MAX:
+        return f"more than {100 * SHIFT_TEXT_MAX:.0f} % (beyond a first-order estimate)"
+    return f"{100 * x:+.2g} %"
 
 
 def _in_se(e: Effect) -> str:
@@ -344,8 +356,8 @@ def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str
     if e is None or not e.resolved():  # below what the data resolve: report.json ``model`` says so
         return None
     return (f"The large-stretch approximation (paper eq. 10) at λ0 = {lambda0:g}: fitting it to the exact "
-            f"membrane's curve at these values shifts W_ad by {100 * e.shift['work_of_adhesion']:+.2g} % and μh by "
-            f"{100 * e.shift['mu_h']:+.2g} % (largest force error {e.force_error / e.sigma:.2g} σ); "
+            f"membrane's curve at these values shifts W_ad by {shift_text(e.shift['work_of_adhesion'])} and μh by "
+            f"{shift_text(e.shift['mu_h'])} (largest force error {e.force_error / e.sigma:.2g} σ); "
             f"use --membrane exact to remove it.")
 
 

@@ -16,6 +16,7 @@ formula in both cases, and it is what the slip comparison uses (:mod:`.selection
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -26,10 +27,13 @@ from .lsq import PENALTY, Parametrisation, RawFit, residual_function
 from .model import CurveModel, ModelDomainError
 from .observables import PRIMARY, Observable, ObservedRows
 
-__all__ = ["Block", "Member", "SharedParametrisation", "ObjectiveFit", "objective_residual", "Values",
+__all__ = ["SIGMA_FLOOR", "Block", "Member", "SharedParametrisation", "ObjectiveFit", "objective_residual", "Values",
            "block_sizes", "split_blocks"]
 
 _SHARED = ("ln_work_of_adhesion", "ln_mu_h")
+#: least noise level, as a fraction of the largest value of its block: noise-free data must not get an
+#: unbounded weight, and the model's own precision (the history interpolated at the rows) is ~1e-5 of it
+SIGMA_FLOOR = 1e-5
 _OFFSETS = ("x_offset", "force_offset")
 
 
@@ -242,6 +246,15 @@ class ObjectiveFit:
 
     def si(self) -> tuple[dict, list[dict]]:
         return self.spar.si(self.best.params)
+
+    def replace_best(self, best) -> None:
+        """A better optimum (a restart from a profile's sub-fit): for a one-block fit the member's own fit
+        follows, so everything that reads it sees the new optimum."""
+        self.best = best
+        if not self.joint and self.members[0].single is not None:
+            m = self.members[0]
+            m.single = dataclasses.replace(m.single, best=best, won=f"{m.single.won}; restarted from a "
+                                           "likelihood-profile sub-fit below the optimum", alternatives=())
 
     def start(self, i: int) -> int:
         """Index of member i's first residual."""

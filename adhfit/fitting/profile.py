@@ -59,6 +59,11 @@ class ProfileLimit:
     open : bool
         The data do not bound the parameter on this side: χ² stays below the critical value up to the
         parameter's bound or to the edge of the model's domain (a one-sided result, docs/contracts.md A5b).
+    gain : float
+        The largest drop of D below the optimum's that a sub-fit found (0 when none): a drop far below
+        one unit of D is the χ² surface's numerical roughness, not a better optimum.
+    better : dict or None
+        The internal parameter values of that sub-fit (a start for a refit).
     """
 
     value: float | None
@@ -68,6 +73,8 @@ class ProfileLimit:
     nfev: int
     open: bool = False
     outer: float | None = None
+    gain: float = 0.0
+    better: dict | None = None
 
     @property
     def bound(self) -> float | None:
@@ -112,7 +119,7 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
     se = min(se, MAX_FIRST_STEP)  # a flat direction (huge se) is explored from a sane first step
     lo, hi = best.params[name].min, best.params[name].max
     t = direction * math.sqrt(crit) * se
-    tried, nfev, better, hit_domain = [], 0, False, False
+    tried, nfev, better, hit_domain, gain, where = [], 0, False, False, 0.0, None
     for k in range(MAX_SUBFITS):
         value = float(np.clip(theta0 + t, lo, hi))
         res = _subfit(residual, best, name, value, {o: s * (value - theta0) for o, s in slopes.items()},
@@ -127,21 +134,23 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
         d = (res.chisqr - best.chisqr) / s2
         if d < -1e-6 * max(best.chisqr / s2, 1.0):
             better = True
+            if -d > gain:
+                gain, where = -d, {k: float(p.value) for k, p in res.params.items()}
         q = math.sqrt(max(d, 0.0) / crit)
         tried.append((value - theta0, q))
         if abs(q - 1.0) < TOL:
-            return ProfileLimit(value, k + 1, True, better, nfev)
+            return ProfileLimit(value, k + 1, True, better, nfev, gain=gain, better=where)
         if value in (lo, hi) and q < 1.0:
-            return ProfileLimit(value, k + 1, False, better, nfev, open=True)
+            return ProfileLimit(value, k + 1, False, better, nfev, open=True, gain=gain, better=where)
         if len(tried) >= 2 and all(p[1] < FLAT_Q for p in tried[-2:]) and abs(t) > FLAT_STEPS * se:
             # χ² barely moves over many standard errors: the data do not bound this side
-            return ProfileLimit(value, k + 1, False, better, nfev, open=True)
+            return ProfileLimit(value, k + 1, False, better, nfev, open=True, gain=gain, better=where)
         t = _next_step(tried, direction, se)
     above = [t for t, q in tried if q >= 1.0]
     far = bool(tried) and max(abs(p[0]) for p in tried) > 10.0 * se
     outer = theta0 + min(above, key=abs) if above else None
     return ProfileLimit(theta0 + tried[-1][0] if tried else None, len(tried), False, better, nfev,
-                        open=not above and (hit_domain or far or not tried), outer=outer)
+                        open=not above and (hit_domain or far or not tried), outer=outer, gain=gain, better=where)
 
 
 def _next_step(tried, direction, se):
@@ -157,8 +166,8 @@ def _next_step(tried, direction, se):
     return t1 / q1 if q1 > 0.25 else 4.0 * t1
 
 
-def profile_interval(residual, best, name: str, *, sigma_given: bool,
-                     level: float = 0.95) -> tuple[ProfileLimit, ProfileLimit]:
+def profile_interval(residual, best, name: str, *, sigma_given: bool, level: float = 0.95,
+                     s2_floor: float = 0.0) -> tuple[ProfileLimit, ProfileLimit]:
     """Lower and upper 95 % profile limits of internal parameter ``name`` of an lmfit result.
 
     Parameters
@@ -173,18 +182,22 @@ def profile_interval(residual, best, name: str, *, sigma_given: bool,
         Whether the residuals are in units of a known σ (χ² test) or σ is estimated (F-test).
     level : float
         Two-sided level (0.90 gives the one-sided 95 % bound of a side whose other side is open).
+    s2_floor : float
+        Least residual variance (residual units) D is measured in when σ is estimated: the model's own
+        numerical precision, under which noise-free data's χ² is interpolation roughness.
     """
     n_free = int(best.ndata - best.nvarys)
     crit = critical_value(n_free, sigma_given, level)
-    s2 = 1.0 if sigma_given else best.chisqr / max(n_free, 1)
+    s2 = 1.0 if sigma_given else max(best.chisqr / max(n_free, 1), s2_floor)
     return (_side(residual, best, name, -1.0, crit, s2, not sigma_given),
             _side(residual, best, name, +1.0, crit, s2, not sigma_given))
 
 
 def one_side(residual, best, name: str, direction: float, *, sigma_given: bool,
-             level: float = 0.90) -> ProfileLimit:
-    """One profile limit at a two-sided ``level`` (0.90: a one-sided 95 % bound)."""
+             level: float = 0.90, s2_floor: float = 0.0) -> ProfileLimit:
+    """One profile limit at a two-sided ``level`` (0.90: a one-sided 95 % bound); ``s2_floor`` as for
+    :func:`profile_interval`."""
     n_free = int(best.ndata - best.nvarys)
     crit = critical_value(n_free, sigma_given, level)
-    s2 = 1.0 if sigma_given else best.chisqr / max(n_free, 1)
+    s2 = 1.0 if sigma_given else max(best.chisqr / max(n_free, 1), s2_floor)
     return _side(residual, best, name, direction, crit, s2, not sigma_given)

@@ -72,18 +72,49 @@ def _diagnostics(fit, est: dict, limits: dict) -> list[str]:
             out.append(f"the profile of {name} found a lower χ² than the optimum: the fit may not have converged")
     if fit.joint:
         out.append(f"joint fit: {best.message} ({'converged' if best.success else 'not converged'})")
+    if getattr(fit, "restarts", 0):
+        out.append(f"the optimiser had stopped short: {fit.restarts} restart(s) from a likelihood-profile sub-fit "
+                   "below the optimum")
+    won = [f"{m.label or 'curve'}: {m.single.won}" if len(fit.members) > 1 else m.single.won
+           for m in fit.members if m.single is not None and m.single.won]
+    if won:
+        out.append("the optimum came from: " + "; ".join(won))
     starts = [st for m in fit.members if m.single is not None for st in m.single.starts]
     out += [f"start {i}: χ² = {st['chisqr']:.6g}" for i, st in enumerate(starts)]
     return out
 
 
-def status_warnings(est: dict) -> list[str]:
+def reached(fit) -> str | None:
+    """Where a test without pull-off stops, in words: the stage of its last row at the fitted values
+    (contact pinning, or so many rows into delamination); None when a curve shows its pull-off."""
+    shared, offs = fit.si()
+    for m, off in zip(fit.members, offs):
+        model = m.model
+        try:
+            if model.split(shared["work_of_adhesion"], shared["mu_h"], off["x_offset"]) is not None:
+                continue
+            pcs = model.pieces(shared["work_of_adhesion"], shared["mu_h"], off["x_offset"])
+        except ModelDomainError:
+            return None
+        xd = model.dimensionless_x(shared["mu_h"], off["x_offset"])[model.segments.i_turn + 1:]
+        if xd.size == 0:
+            return "the test stops at the end of loading, so the pull-off that sets W_ad is never reached"
+        n_delam = int(np.count_nonzero(xd < pcs.x_onset))
+        if n_delam == 0:
+            return ("the unloading stops during contact pinning, before the membrane starts to peel off, so the "
+                    "pull-off that sets W_ad is never reached")
+        return (f"the unloading stops {n_delam} row{'s' if n_delam > 1 else ''} into delamination, while the "
+                f"membrane peels off but before it comes off, so the pull-off that sets W_ad is never reached")
+    return None
+
+
+def status_warnings(est: dict, why_stopped: str | None = None) -> list[str]:
+    """Plain sentences for parameters the data bound from one side only or do not determine."""
     out = []
     for name, e in est.items():
         label = _PLAIN.get(name, name)
         if e.status == "lower_bound":
-            why = (" (the unloading stops before the membrane starts to peel off, so the pull-off that "
-                   "sets W_ad is never reached)" if name == "work_of_adhesion" else "")
+            why = f" ({why_stopped})" if name == "work_of_adhesion" and why_stopped else ""
             out.append(f"The data only bound {label} from below{why}: {label} ≥ {e.ci95[0]:.3g} {e.unit} "
                        f"(one-sided 95 %); no value is reported.")
         elif e.status == "upper_bound":
@@ -168,7 +199,8 @@ def summarize(fit, *, profile: bool = True) -> SlipFit:
     prof_info = {k: {"subfits": lo.n_subfits + hi.n_subfits, "evaluations": lo.nfev + hi.nfev,
                      "converged": [lo.converged, hi.converged], "open": [lo.open, hi.open]}
                  for k, (lo, hi) in limits.items()}
-    warn = status_warnings(est)
+    lower = est["work_of_adhesion"].status == "lower_bound"
+    warn = status_warnings(est, reached(fit) if lower else None)
     if factor > 1.0:
         which = "" if len(rows) == 1 else " of at least one curve"
         warn.append(f"The force noise{which} is correlated from row to row (lag-1 autocorrelation {rho:.2f}): "
