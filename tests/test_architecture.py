@@ -186,3 +186,35 @@ def test_fitting_does_not_reach_the_report_or_the_command_line(module):
         seen.add(m)
         todo += [t for t, _ in GRAPH.get(m, []) if t != "adhfit" and (m, t) not in LAZY_HOOKS]
     assert not [m for m in seen if _layer(m) > 5]
+
+
+def test_report_has_one_writer_per_format():
+    """Issue 19 item 3: every report reads one report dict; one writer per format, no per-series or per-method
+    twins (``series_*``, ``*_mcmc``, ``mcmc_markdown``), and the writers know blocks, not report keys."""
+    names = {p.stem for p in (PACKAGE / "report").glob("*.py")}
+    assert not [n for n in names if n.startswith("series") or n.endswith("_mcmc") or n.startswith("mcmc_markdown")]
+    assert {"view", "sections", "json_report", "markdown", "html"} <= names
+    for writer in ("markdown", "html"):
+        tree = ast.parse((PACKAGE / "report" / f"{writer}.py").read_text(encoding="utf-8"))
+        keys = {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value in
+                ("curves", "mcmc", "sampling", "segments", "fits")}
+        assert keys == set(), f"{writer}.py reads report keys {keys}: build the section in sections.py"
+
+
+def test_report_files_are_written_through_one_atomic_helper():
+    """Issue 23 item 6: no report module writes a file directly (write_text, write_bytes, open(..., "w"),
+    savefig to a path); they call adhfit.report.files, which writes a temporary file and renames it."""
+    found = []
+    for path in sorted((PACKAGE / "report").glob("*.py")):
+        if path.name == "files.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                    and node.func.attr in ("write_text", "write_bytes"):
+                found.append(f"{path.name}:{node.lineno} {node.func.attr}")
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "open":
+                found.append(f"{path.name}:{node.lineno} open")
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "savefig" \
+                    and not any(isinstance(k.value, ast.Constant) and k.arg == "format" for k in node.keywords):
+                found.append(f"{path.name}:{node.lineno} savefig without a stream")
+    assert found == []
