@@ -18,7 +18,7 @@ from typing import Any
 
 from .files import write_text
 from .html_parts import details, e, figure, page, table
-from .sections import FIGURE_CAPTIONS, METHODS, build_view, estimate_row
+from .sections import METHODS, build_view, estimate_row
 from .view import Bullets, Figure, Note, Section, Table, View, display, estimate_text, seed_text
 
 __all__ = ["render_html", "write_html", "fit_summary_html", "render_view"]

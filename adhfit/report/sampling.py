@@ -119,7 +119,7 @@ def _how(m: Mapping[str, Any]) -> Table:
             ("stopping rule", m.get("stopping_rule")), ("seed", m.get("seed")),
             ("chains saved in", m.get("chain_file") or "not saved"),
             ("posterior evaluations", fmt(m.get("model_evaluations"))),
-            ("model evaluations per second while sampling", fmt(eps, 3) if eps else None),
+            ("model evaluations per second while sampling", f"{eps:.0f}" if eps else None),
             ("least-squares stage", f"{fmt(m.get('lsq_seconds'), 3)} s" if m.get("lsq_seconds") is not None
              else None))
     return Table(("", ""), tuple((k, str(v)) for k, v in rows if v not in (None, "", "n/a")))

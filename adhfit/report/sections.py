@@ -182,11 +182,10 @@ def _rows(d: Mapping[str, Any]) -> Section:
                   "σ = spacing/√12) is one more residual against the model's turning point."]
     if _series(d):
         facts.append("Per curve: its rows and first row after the jump are in the Curves table.")
-    blocks: list[Any] = [Bullets(tuple(facts))]
     rest = {k: v for k, v in seg.items() if k not in ("i_turn", "i_jump", "jump", "n_loading", "n_attached",
                                                      "n_detached")}
-    if rest:
-        blocks.append(Table(("", ""), tuple((k.replace("_", " "), _plain(v)) for k, v in rest.items())))
+    facts += [f"{k.replace('_', ' ')}: {_plain(v)}" for k, v in rest.items()]
+    blocks: list[Any] = [Bullets(tuple(facts))]
     excluded = list(d.get("excluded") or [])
     if excluded:
         blocks += [Note(("Lines left out of the file:",)),

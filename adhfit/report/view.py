@@ -19,7 +19,7 @@ from typing import Any, Mapping
 from ..params import FITTED
 
 __all__ = ["DISPLAY_UNITS", "OFFSET_SENTENCE", "SCENE_FIELDS", "Bullets", "Figure", "Note", "Section", "Table",
-           "View", "curve_label", "display", "estimate_text", "fmt", "interval_text", "offset_name",
+           "View", "curve_label", "display", "estimate_text", "finite", "fmt", "interval_text", "offset_name",
            "scene_value", "seed_text", "status_text"]
 
 #: SI unit -> (SI -> display factor, display unit)
