@@ -1,8 +1,9 @@
 """Files of a report written safely, and links between them.
 
 Every report file is written atomically (issue 23 item 6): the content goes to a temporary file in the
-same folder, then ``os.replace`` puts it in place, so an interrupted run leaves the old file or the new
-one, never half of one.  Links built from file names (issue 23 item 7) are relative, URL-encoded and
+same folder, then ``os.replace`` puts it in place, so an interrupted run (Ctrl-C, a killed worker) leaves
+the old file or the new one, never half of one.  (No ``fsync``: a batch writes five files a curve, and
+the rename already guards against interruption; a power cut may still lose the newest file.)  Links built from file names (issue 23 item 7) are relative, URL-encoded and
 never carry a scheme (``javascript:``, ``file:``, ``http:``).
 """
 from __future__ import annotations
@@ -37,8 +38,6 @@ def write_atomic(path: str | Path, fill: Callable[[IO[bytes]], Any]) -> Path:
     try:
         with os.fdopen(fd, "wb") as f:
             fill(f)
-            f.flush()
-            os.fsync(f.fileno())
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:

@@ -17,8 +17,9 @@ from .view import Bullets, Figure, Note, Section, Table, View
 
 __all__ = ["md_escape", "render_markdown", "write_markdown"]
 
-#: CommonMark/GFM punctuation that can start markup anywhere in a line (a backslash makes it literal)
-_MARKUP = re.compile(r"([\\`*_{}\[\]<>|~!#&])")
+#: CommonMark/GFM punctuation that can start markup anywhere in a line (a backslash makes it literal); an
+#: underscore only where it is not between two letters or digits (inside a word it is never emphasis: W_ad)
+_MARKUP = re.compile(r"([\\`*{}\[\]<>|~!#&]|(?<![^\W_])_|_(?![^\W_]))")
 #: what starts a list, a quote or a heading underline at the start of a paragraph
 _START = re.compile(r"^(\s*)(?:([-+=])|(\d+)([.)]))(?=\s|$)")
 
