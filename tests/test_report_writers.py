@@ -223,3 +223,10 @@ def test_a_deep_copy_renders_the_same(tmp_path):
     render_html(d)
     render_markdown(d)
     assert d == before
+
+
+def test_a_series_per_curve_offset_has_its_symbol_unit_and_curve():
+    from adhfit.report.view import display
+    assert display("force_offset_1") == ("F_0 [2]", "load-cell zero (force offset) of curve 2", 1e3, "mN")
+    assert display("displacement_offset_0")[2:] == (1e6, "µm")
+    assert display("mystery_3") == ("mystery_3", "mystery 3", 1.0, "")

@@ -34,14 +34,21 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
     Returns
     -------
     matplotlib.figure.Figure
+
+    Notes
+    -----
+    A series shows its shared W_ad and μh only (its per-curve offsets are in the report's Curves table;
+    a panel per offset pair would grow with the square of the number of curves).
     """
     _pyplot()
     import corner  # noqa: PLC0415
     slip = slip or result.slip["parameters_from"]
-    names = result.mcmc["slips"][slip]["parameters"]
+    every = list(result.mcmc["slips"][slip]["parameters"])
+    names = [n for n in every if not result.curves or n in ("work_of_adhesion", "mu_h")]
     k = np.array([_label(n)[0] for n in names])
-    samples = np.asarray(result.samples[slip]) * k
-    truths = [result.mcmc["lsq_estimates"][slip][n] * f for n, f in zip(names, k)]
+    samples = np.asarray(result.samples[slip])[:, [every.index(n) for n in names]] * k
+    lsq = (result.mcmc.get("lsq_estimates") or {}).get(slip) or {}
+    truths = [None if lsq.get(n) is None else lsq[n] * f for n, f in zip(names, k)]
     fig = corner.corner(samples, labels=[_label(n)[1] for n in names], truths=truths,
                         truth_color="#d62728", quantiles=[0.025, 0.5, 0.975], show_titles=True,
                         title_fmt=".4g", title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 9})

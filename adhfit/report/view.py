@@ -132,6 +132,10 @@ def display(name: str, unit: str | None = None) -> tuple[str, str, float, str]:
     Symbols and SI units come from :data:`adhfit.params.FITTED`; names the table does not know keep
     ``unit`` as it is.
     """
+    base, _, k = name.rpartition("_")
+    if base and k.isdigit() and FITTED.get(offset_name(base)):  # a series' per-curve offset: ``force_offset_0``
+        sym, plain, f, shown = display(base, unit)
+        return f"{sym} [{int(k) + 1}]", f"{plain} of curve {int(k) + 1}", f, shown
     p = FITTED.get(offset_name(name))
     if p is None:
         return name, name.replace("_", " "), 1.0, unit or ""

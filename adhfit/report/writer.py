@@ -2,9 +2,10 @@
 
 ``report.json`` (docs/contracts.md A5/A5b/A7) is built once (:func:`.json_report.report_dict`); report.md
 and report.html render that one dictionary (:func:`.sections.build_view`).  Figures: ``fit.png`` (one curve,
-or every curve of a series with the shared fit); an MCMC fit of one curve adds ``fit_mcmc.png``
-(posterior-predictive band) and ``corner.png``; one curve also writes ``plot_data.json`` (the data and the
-fitted curve, for a batch's summary page).  Every file is written atomically (:mod:`.files`).
+or every curve of a series with the shared fit); an MCMC fit adds ``corner.png`` (the posterior of the
+reported slip condition) and, for one curve, ``fit_mcmc.png`` (posterior-predictive band); one curve also
+writes ``plot_data.json`` (the data and the fitted curve, for a batch's summary page).  Every file is
+written atomically (:mod:`.files`).
 """
 from __future__ import annotations
 
@@ -57,14 +58,17 @@ def write(result: Any, outdir: str | Path, *, plot: bool = True, extra: Mapping[
 
 
 def _figures(result: Any, out: Path, drawn: tuple[str, ...]) -> dict[str, Path]:
-    """fit.png, and a one-curve MCMC fit's fit_mcmc.png and corner.png: name -> path."""
+    """fit.png, and an MCMC fit's corner.png (one curve: also fit_mcmc.png): name -> path."""
     if "fit.png" not in drawn:
         from .fit_plot import plot_fit  # noqa: PLC0415
         plot_fit(result, path=out / "fit.png")
     figures = {"fit.png": out / "fit.png"}
     if result.sampling and not result.curves and result.predictive:
-        from .mcmc_plots import plot_corner, plot_predictive  # noqa: PLC0415
+        from .mcmc_plots import plot_predictive  # noqa: PLC0415
         plot_predictive(result, path=out / "fit_mcmc.png")
+        figures["fit_mcmc.png"] = out / "fit_mcmc.png"
+    if result.sampling and result.samples:
+        from .mcmc_plots import plot_corner  # noqa: PLC0415
         plot_corner(result, path=out / "corner.png")
-        figures |= {name: out / name for name in ("fit_mcmc.png", "corner.png")}
+        figures["corner.png"] = out / "corner.png"
     return figures
