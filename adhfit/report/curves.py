@@ -9,7 +9,7 @@ from typing import Any
 from .view import (OFFSET_SENTENCE, Bullets, Note, Section, Table, curve_label, display, estimate_text, fmt,
                    interval_text)
 
-__all__ = ["curves_section", "series_facts", "inputs_table", "scene_text", "FLAG_WORDS"]
+__all__ = ["curves_section", "series_facts", "inputs_table", "rows_facts", "scene_text", "FLAG_WORDS"]
 
 FLAG_WORDS = {"redchi": "misfit: the shared values do not follow it",
               "redchi_contact_radius": "contact radius misfit",
@@ -134,3 +134,15 @@ def inputs_table(prov: Mapping[str, Any]) -> Table:
                  tuple((str(k + 1), str(f), str(shas[k] or "n/a"), str(scenes[k] or "n/a"))
                        for k, f in enumerate(files)))
 
+
+
+def rows_facts(d: Mapping[str, Any]) -> list[str]:
+    """Per curve of a series: its rows and where the model puts the jump off the substrate."""
+    out = []
+    for k, c in enumerate(d.get("curves") or []):
+        jump = c.get("first_detached_row")
+        out.append(f"curve {k + 1} ({curve_label(c.get('file'))}): {fmt(c.get('n_points'))} rows; "
+                   + ("every unloading row modelled as attached (no jump off the substrate in the data)."
+                      if jump is None else f"rows from {fmt(jump + 1)} on are after the jump off the substrate "
+                                           "(the free membrane, model force zero)."))
+    return out

@@ -181,7 +181,7 @@ def _rows(d: Mapping[str, Any]) -> Section:
                   "The measured pull-off position (midway between the last attached and the first detached row, "
                   "σ = spacing/√12) is one more residual against the model's turning point."]
     if _series(d):
-        facts.append("Per curve: its rows and first row after the jump are in the Curves table.")
+        facts += _curves.rows_facts(d)
     rest = {k: v for k, v in seg.items() if k not in ("i_turn", "i_jump", "jump", "n_loading", "n_attached",
                                                      "n_detached")}
     facts += [f"{k.replace('_', ' ')}: {_plain(v)}" for k, v in rest.items()]
