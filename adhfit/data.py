@@ -26,10 +26,11 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .errors import DataError, InputError
-from .readers import detect_layout
-from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, assign, check_overrides, split_cell
-from .readers.text import Layout, read_lines, split_line
+from .errors import DataError, InputError, shown
+from .readers.columns import COLUMNS, OPTIONAL, REQUIRED, Assignment, check_overrides, split_cell
+from .readers.formats import SNIFF_BYTES, find_format
+from .readers.tables import locate
+from .readers.text import Layout, read_bytes
 
 __all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
 
@@ -51,7 +52,7 @@ class Curve:
     Attributes
     ----------
     path : str
-        The CSV file.
+        The curve file (a workbook's sheet is named in :attr:`layout`).
     control : {"displacement", "pressure"}
         Which variable the test drives.
     x : ndarray
@@ -166,15 +167,15 @@ class Curve:
 
 def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | None = None,
                units: Mapping[str, str] | None = None, force_sign: str | None = None,
-               displacement_sign: str | None = None) -> Curve:
+               displacement_sign: str | None = None, sheet: str | None = None) -> Curve:
     """Read a measured curve (docs/contracts.md A4, A4b).
 
     Parameters
     ----------
     path : str or Path
-        Text file: CSV (``,`` ``;`` or tab, decimal point or comma, UTF-8 with or without BOM,
-        UTF-16 with BOM, Latin-1), an instrument export with metadata and a units row, or a LabVIEW
-        ``.lvm`` file.
+        A file of any format in :data:`adhfit.readers.FORMATS`: delimited text (``,`` ``;`` or tab,
+        decimal point or comma, UTF-8 with or without BOM, UTF-16 with BOM, Latin-1), an instrument
+        export with metadata and a units row, a LabVIEW measurement file or an Excel workbook.
     control : {"displacement", "pressure"}
         The test's control mode, which decides the required columns.
     columns : mapping, optional
@@ -185,6 +186,9 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
         The file's force sign convention (default compressive-positive, adhfit's).
     displacement_sign : {"into-substrate-positive", "away-positive"}, optional
         The file's displacement sign convention (default into-substrate-positive, adhfit's).
+    sheet : str, optional
+        A workbook's sheet holding the curve; by default the one sheet whose header has the columns
+        ``control`` needs.
 
     Returns
     -------
@@ -207,25 +211,24 @@ def read_curve(path: str | Path, control: str, *, columns: Mapping[str, str] | N
         raise InputError("control", control, "one of 'displacement', 'pressure'")
     check_overrides(control, columns, units, force_sign, displacement_sign)
     where = str(path)
-    raw, lines, encoding = read_lines(path, where)
-    layout = detect_layout(lines, where, lvm=Path(path).suffix.lower() == ".lvm")
-    header = split_line(lines[layout.header_no - 1], layout.sep)
-    spec = assign(header, control, where=where, header_no=layout.header_no,
-                  units_row=None if layout.units_no is None else split_line(lines[layout.units_no - 1], layout.sep),
-                  units_no=layout.units_no, file_units=layout.units, time_columns=layout.time_columns,
-                  columns=columns, units=units)
-    table = _table(lines, layout, header, spec, where)
+    raw = read_bytes(path, where)
+    fmt = find_format(path, raw[:SNIFF_BYTES])
+    tables = fmt.tables(raw, where)
+    source, layout, header, spec = locate(tables, fmt, control, sheet=sheet, columns=columns, units=units,
+                                          where=where)
+    lines = source.lines
+    table = _table(lines, layout, header, spec, source.where)
     if len(layout.rows) < MIN_ROWS:
         raise DataError(f"only {len(layout.rows)} data rows; at least {MIN_ROWS} are needed (loading, then "
-                        "unloading)", path=where)
+                        "unloading)", path=source.where)
     line_no = np.array(layout.rows, dtype=int)
-    values = _values(table, spec, line_no, layout.decimal, where)
+    values = _values(table, spec, line_no, layout.decimal, source.where)
     signs = {"force": force_sign == "tensile-positive", control: displacement_sign == "away-positive"}
     values = {k: -v if signs.get(k) else v for k, v in values.items()}
     x = values[control]
-    _check_physics(values, line_no, spec.header, control, where)
+    _check_physics(values, line_no, spec.header, control, source.where)
     signs_given = {"force sign": force_sign, "displacement sign": displacement_sign}
-    notes = [layout.description, encoding, *spec.inferred.values(),
+    notes = [layout.description, source.note, *spec.inferred.values(),
              *(f"{k} {v}" for k, v in signs_given.items() if v)]
     return Curve(path=where, control=control, x=x, force=values["force"], line=line_no,
                  i_turn=int(np.argmax(x)), time=values.get("time"),
@@ -273,7 +276,7 @@ def _values(table: pd.DataFrame, spec: Assignment, line_no: np.ndarray, decimal:
         if name == "time" and col_bad.size:  # optional: a clock-time column is left out, not an error
             i = int(col_bad[0])
             spec.ignored.append((spec.header[name], f"time not a number (line {line_no[i]}: "
-                                                    f"{table.iloc[i, j]!r})"))
+                                                    f"{shown(table.iloc[i, j])})"))
             for d in (values, spec.index, spec.header, spec.units, spec.factors):
                 d.pop(name)
             continue
@@ -299,14 +302,14 @@ def _describe(cell: str, decimal: str = ".") -> str:
     if not cell.strip():
         return "empty cell"
     if decimal == "," and "." in cell:
-        return f"{cell!r} is not a number (this file writes decimal commas)"
+        return f"{shown(cell)} is not a number (this file writes decimal commas)"
     try:
         value = float(cell.replace(",", ".") if decimal == "," else cell)
     except ValueError:
-        return f"{cell!r} is not a number" + (" (use a decimal point)" if "," in cell else "")
+        return f"{shown(cell)} is not a number" + (" (use a decimal point)" if "," in cell else "")
     if np.isfinite(value):
-        return f"{cell!r} is not a plain decimal number"
-    return f"{cell!r} is not a finite number (NaN and inf are not data)"
+        return f"{shown(cell)} is not a plain decimal number"
+    return f"{shown(cell)} is not a finite number (NaN and inf are not data)"
 
 
 def _check_physics(values: dict[str, np.ndarray], line_no: np.ndarray, col: Mapping[str, str], control: str,

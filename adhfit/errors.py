@@ -7,6 +7,47 @@ from __future__ import annotations
 
 from typing import Any
 
+#: Longest echo of a value in an error message, in characters (a 1 MB cell must not fill a terminal).
+ECHO_LIMIT = 80
+
+
+def clip(text: str, limit: int = ECHO_LIMIT) -> str:
+    """``text`` cut to about ``limit`` characters for a message, saying how long it was.
+
+    Examples
+    --------
+    >>> clip("Load (N)")
+    'Load (N)'
+    >>> clip("a" * 1000, limit=10)
+    'aaaaaaaaa… (1000 characters)'
+    """
+    text = str(text)
+    return text if len(text) <= limit else text[: max(limit - 1, 1)] + f"… ({len(text)} characters)"
+
+
+def shown(value: Any, limit: int = ECHO_LIMIT) -> str:
+    """``repr(value)`` for an error message, cut to about ``limit`` characters.
+
+    Every message that echoes a user's value (a cell, a unit, a header, a scene value) goes through
+    this, so a hostile or mistaken megabyte of text is named, not printed.
+
+    Examples
+    --------
+    >>> shown("kPa")
+    "'kPa'"
+    >>> shown("x" * 1000, limit=20)
+    "'xxxxxxxxxxxxxxxxx…' (1000 characters)"
+    """
+    try:
+        text = repr(value)
+    except RecursionError:  # a 1,000-deep table from a TOML file
+        return f"<a {type(value).__name__} nested too deeply to show>"
+    if len(text) <= limit:
+        return text
+    size = f" ({len(value)} characters)" if isinstance(value, (str, bytes)) else ""
+    return text[: max(limit - 2, 1)] + "…" + text[0] * (text[0] in "'\"") + size
+
+
 
 class AdhfitError(Exception):
     """Base class of every error adhfit raises on purpose."""
@@ -32,7 +73,7 @@ class InputError(AdhfitError, ValueError):
         self.value = value
         self.valid = valid
         self.reason = reason
-        msg = f"The '{name}' parameter must be {valid}. Got {value!r} instead."
+        msg = f"The '{name}' parameter must be {valid}. Got {shown(value)} instead."
         if reason:
             msg += f" {reason}"
         super().__init__(msg)
@@ -82,6 +123,6 @@ class DataError(AdhfitError, ValueError):
         if line is not None:
             where.append(f"line {line}")
         if column is not None:
-            where.append(f"column '{column}'")
+            where.append(f"column '{clip(column)}'")
         prefix = (", ".join(where) + ": ") if where else ""
         super().__init__(prefix + message)

@@ -192,3 +192,16 @@ def check_scene(control: str, slip: str, *, p: float | None, d: float | None, w:
             raise InputError("d", out["d"], f"such that 2d/(1+d^2) > -1/rs = {_fmt(0.0 - curv)}",
                              "Contact must start at the substrate apex.")
     return out
+
+
+# --- choice lists: the one place every layer (scene file, options, command line, reports) reads them ----
+#: loading modes (docs/contracts.md A1-A3)
+CONTROLS = ("displacement", "pressure")
+#: the two interface limits of the model
+SLIP_CONDITIONS = ("no-slip", "frictionless")
+#: slip choices of a scene or a fit: ``auto`` fits both conditions and compares them
+SLIP_CHOICES = ("auto", *SLIP_CONDITIONS)
+#: membrane models of a fit (docs/contracts.md A6): ``auto`` picks the one the data need
+MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
+#: fitting methods
+METHODS = ("lsq", "mcmc")

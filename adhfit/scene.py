@@ -16,15 +16,21 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import DataError, InputError
-from .params import A_MAX_OVER_RS, DIMENSIONLESS, FITTED
+from .errors import DataError, InputError, clip, shown
+from .params import A_MAX_OVER_RS, CONTROLS, DIMENSIONLESS, FITTED, MEMBRANE_CHOICES, SLIP_CHOICES
 from .units import DIMENSIONS, GROUPS, Scales, parse_quantity
 
 __all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMBRANE_MODELS", "LAYOUT", "PRIOR_DISTS"]
 
-CONTROLS = ("displacement", "pressure")
-SLIPS = ("auto", "no-slip", "frictionless")
-MEMBRANE_MODELS = ("auto", "large-stretch", "exact")  # of a fit (docs/contracts.md A6)
+#: Largest scene file read, in bytes (a scene is a few hundred bytes).
+MAX_SCENE_BYTES = 1_000_000
+#: Largest length a scene file may give as a plain number (read in metres, SI).  Membrane tests are
+#: micrometres to centimetres; ``radius = 2`` meant 2 mm, and read as 2 m it made every later check
+#: blame another setting (the pressure's unit).  A larger length is written with its unit ('0.5 m').
+PLAIN_LENGTH_MAX = 0.1
+
+SLIPS = SLIP_CHOICES
+MEMBRANE_MODELS = MEMBRANE_CHOICES  # of a fit (docs/contracts.md A6)
 
 #: TOML layout (docs/contracts.md A3): section -> key -> (Scene field, dimension or None for a word).
 LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {
@@ -275,7 +281,7 @@ def normalize_priors(priors: Mapping[str, Any], *, prefix: str = "priors") -> di
         label = f"{prefix}.{name}"
         if name not in _PRIOR_DIMENSION:
             raise InputError(label, spec, "a prior of a fitted parameter: " + ", ".join(_PRIOR_DIMENSION),
-                             f"Unknown parameter '{name}';{_suggest(name, _PRIOR_DIMENSION)}".rstrip(";"))
+                             f"Unknown parameter '{clip(str(name))}';{_suggest(name, _PRIOR_DIMENSION)}".rstrip(";"))
         dist = spec.get("dist") if isinstance(spec, Mapping) else None
         if dist not in PRIOR_DISTS:
             raise InputError(label, spec, "a table with dist = " + " | ".join(map(repr, PRIOR_DISTS)) +
@@ -321,10 +327,17 @@ def load_scene(path: str | Path) -> Scene:
     """
     where = str(path)
     try:
-        text = Path(path).read_bytes().decode("utf-8-sig")
+        raw = Path(path).read_bytes()
+        if len(raw) > MAX_SCENE_BYTES:
+            raise DataError(f"the scene file has {len(raw):,} bytes; a scene file holds a few lines (at most "
+                            f"{MAX_SCENE_BYTES:,} bytes): is this the scene file?", path=where)
+        text = raw.decode("utf-8-sig")
         doc = tomllib.loads(text)
     except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"cannot read the scene file ({exc})", path=where) from None
+        raise DataError(f"cannot read the scene file ({clip(str(exc))})", path=where) from None
+    except RecursionError:  # tomllib recurses once per level of [[[...]]] or {a = {b = ...}}
+        raise DataError("tables or arrays nested too deeply to read; a scene file holds '[section]' headers "
+                        "and 'key = value' lines (priors: one inline table per parameter)", path=where) from None
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"at line (\d+)", str(exc))
         raise DataError(f"not valid TOML: {exc}", path=where, line=int(m.group(1)) if m else None) from None
@@ -342,8 +355,9 @@ def load_scene(path: str | Path) -> Scene:
             key = FILE_KEY.get(exc.name, exc.name)
             sec, k = key[1:].split("] ") if key.startswith("[") else (None, None)
         table = doc.get(sec, {}) if sec not in (None, "priors") else {}
-        shown = table.get(k, exc.value) if isinstance(table, dict) else exc.value
-        raise fail(f"{key} must be {exc.valid}, got {shown!r}. {exc.reason}".rstrip(), sec, k) from None
+        given = table.get(k, exc.value) if isinstance(table, dict) else exc.value
+        raise fail(f"{clip(key)} must be {clip(exc.valid, 300)}, got {shown(given)}. {clip(exc.reason, 300)}".rstrip(),
+                   sec, k) from None
 
 
 def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:
@@ -354,19 +368,20 @@ def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:
         if section not in LAYOUT and section != "priors":
             if not isinstance(table, dict):
                 owner = " or ".join(f"[{s}]" for s, keys in LAYOUT.items() if section in keys)
-                raise fail(f"key '{section}' is outside any section; " + (
+                raise fail(f"key '{clip(section)}' is outside any section; " + (
                     f"it belongs in {owner}." if owner else f"known sections: {sections}"), None, section)
             hint = _suggest(section, [*LAYOUT, "priors"])
-            raise fail(f"unknown section [{section}];{hint} Known sections: {sections}.", section)
+            raise fail(f"unknown section [{clip(section)}];{hint} Known sections: {sections}.", section)
         if not isinstance(table, dict):
             raise fail(f"[{section}] must be a table (a '[{section}]' header and keys)", None, section)
         for key, value in table.items():
             if section == "priors":
                 continue
             if key not in LAYOUT[section]:
-                raise fail(f"[{section}] unknown key '{key}';{_suggest(key, LAYOUT[section])} Known keys: "
+                raise fail(f"[{section}] unknown key '{clip(key)}';{_suggest(key, LAYOUT[section])} Known keys: "
                            f"{', '.join(LAYOUT[section])}.", section, key)
             raw[LAYOUT[section][key][0]] = value
+    _check_plain_lengths(raw, fail)
     for fld in ("membrane_radius", "substrate_radius", "control"):
         if fld not in raw:
             example = {"membrane_radius": "e.g. '2 mm'", "control": "'displacement' or 'pressure'",
@@ -380,6 +395,19 @@ def _fields(doc: dict[str, Any], fail) -> dict[str, Any]:
             raise fail(f"[test] {forbidden} is not used under control = '{raw['control']}' (it varies during "
                        f"the test); give [test] {needed} instead ({what})", "test", forbidden)
     return raw
+
+
+def _check_plain_lengths(raw: dict[str, Any], fail) -> None:
+    """A length given as a plain number (metres) beyond :data:`PLAIN_LENGTH_MAX` is a forgotten unit."""
+    for fld, value in raw.items():
+        if _DIMENSION.get(fld) != "length" or isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if PLAIN_LENGTH_MAX < abs(value) < float("inf"):
+            key = FILE_KEY[fld]
+            section, name = key[1:].split("] ")
+            raise fail(f"{key} = {value!r} is a plain number, so it is read in metres (SI): {value:g} m, larger "
+                       f"than any membrane test (plain lengths above {PLAIN_LENGTH_MAX:g} m are refused); write "
+                       f"the unit, e.g. {name} = '{value:g} mm' (or '{value:g} m' if you mean metres)", section, name)
 
 
 def _suggest(word: str, known: Any) -> str:

@@ -14,13 +14,19 @@ from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
-from .errors import DataError, InputError
+from .errors import DataError, InputError, clip, shown
 
 if TYPE_CHECKING:
     import pint
 
 __all__ = ["ureg", "registry", "DIMENSIONS", "GROUPS", "Scales", "parse_quantity",  # noqa: F822 (ureg: __getattr__)
-           "unit_factor"]
+           "unit_factor", "is_unit", "MAX_UNIT_CHARS", "MAX_VALUE_CHARS"]
+
+#: Longest unit expression parsed, in characters.  The longest real ones ('kilogram_force / centimeter
+#: ** 2') have ~30; pint's parser takes time quadratic in the length (a 10^6-character unit: hours).
+MAX_UNIT_CHARS = 64
+#: Longest value string (number and unit, e.g. ``"1.2 kPa"``) parsed, in characters.
+MAX_VALUE_CHARS = 100
 
 
 @lru_cache(maxsize=1)
@@ -64,7 +70,7 @@ _NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?inf(?
 def _fail(message: str, name: str, value: Any, valid: str, where: str | None) -> NoReturn:
     """Raise a DataError (inside a file) or an InputError (a Python argument)."""
     if where is not None:
-        raise DataError(f"{name} must be {valid}, got {value!r}. {message}".rstrip(), path=where)
+        raise DataError(f"{name} must be {valid}, got {shown(value)}. {message}".rstrip(), path=where)
     raise InputError(name, value, valid, message)
 
 
@@ -76,6 +82,8 @@ def _dimension(dimension: str) -> tuple[str, str, str]:
 
 def _unit_quantity(text: str) -> pint.Quantity:
     """Parse a unit expression ('kPa', 'J/m^2', '1e-3 N'); raise ValueError if pint cannot."""
+    if len(text) > MAX_UNIT_CHARS:
+        raise ValueError(f"{len(text):,} characters, longer than the {MAX_UNIT_CHARS} a unit may have")
     if "," in text or "#" in text:
         # pint would read '1,2 kPa' as 12 kPa and drop '# ...' silently.
         raise ValueError("commas and '#' are not allowed in units")
@@ -122,6 +130,9 @@ def parse_quantity(value: Any, dimension: str, *, name: str, where: str | None =
     if isinstance(value, bool) or not isinstance(value, (int, float, str, np.integer, np.floating)):
         _fail("", name, value, valid, where)
     if isinstance(value, str):
+        if len(value) > MAX_VALUE_CHARS:
+            _fail(f"It has {len(value):,} characters; a value with its unit has at most {MAX_VALUE_CHARS}.",
+                  name, value, valid, where)
         if "," in value:
             _fail("Use a decimal point, not a comma, and one value only.", name, value, valid, where)
         match = _NUMBER.match(value)
@@ -132,9 +143,9 @@ def parse_quantity(value: Any, dimension: str, *, name: str, where: str | None =
             try:
                 q = _unit_quantity(unit)
             except ValueError as exc:
-                _fail(f"Unit '{unit}' is not understood ({exc}).", name, value, valid, where)
+                _fail(f"Unit '{clip(unit)}' is not understood ({clip(str(exc))}).", name, value, valid, where)
             if not q.check(dim):
-                _fail(f"Unit '{unit}' is not {noun}.", name, value, valid, where)
+                _fail(f"Unit '{clip(unit)}' is not {noun}.", name, value, valid, where)
             si = number * float(q.to_base_units().magnitude)
         elif dimension == "dimensionless" or math.isinf(number):
             si = number
@@ -148,6 +159,19 @@ def parse_quantity(value: Any, dimension: str, *, name: str, where: str | None =
     if math.isinf(si) and not (allow_inf and si > 0):
         _fail("Infinite values are not allowed here.", name, value, valid, where)
     return si
+
+
+def is_unit(text: str) -> bool:
+    """Whether ``text`` is a unit pint understands (``mm``, ``kN``, ``sec``); a guess, so never an error.
+
+    Numbers count as units here (``"1e-3 N"`` is one); callers that look for unit names exclude them.
+    Text longer than :data:`MAX_UNIT_CHARS` is not a unit.
+    """
+    try:
+        _unit_quantity(text)
+    except ValueError:
+        return False
+    return True
 
 
 def unit_factor(unit: str, dimension: str, *, name: str, where: str | None = None) -> float:
@@ -173,18 +197,19 @@ def unit_factor(unit: str, dimension: str, *, name: str, where: str | None = Non
     try:
         q = _unit_quantity(unit)
     except ValueError as exc:
-        msg = f"unit '{unit}' is not understood ({exc}); expected {noun} such as '{example.split()[-1]}'"
+        msg = (f"unit '{clip(unit)}' is not understood ({clip(str(exc))}); expected {noun} such as "
+               f"'{example.split()[-1]}'")
         if where is not None:
             raise DataError(msg, path=where, column=name) from None
         raise InputError(name, unit, f"a unit of {noun}", msg) from None
     if not q.check(dim):
-        msg = f"unit {unit} is not {noun} (e.g. '{example.split()[-1]}')"
+        msg = f"unit {clip(unit)} is not {noun} (e.g. '{example.split()[-1]}')"
         if where is not None:
             raise DataError(msg, path=where, column=name)
         raise InputError(name, unit, f"a unit of {noun}", msg)
     factor = float(q.to_base_units().magnitude)
     if not (math.isfinite(factor) and factor > 0.0):
-        msg = f"unit '{unit}' gives a scale factor of {factor!r}"
+        msg = f"unit '{clip(unit)}' gives a scale factor of {factor!r}"
         if where is not None:
             raise DataError(msg, path=where, column=name)
         raise InputError(name, unit, "a unit with a finite positive scale", msg)

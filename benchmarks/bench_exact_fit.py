@@ -27,7 +27,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from adhfit.fitting.fit import fit_curve  # noqa: E402
+from adhfit.fitting.api import fit as fit_curve  # noqa: E402
 from tests.exact_curves import exact_curve, scene  # noqa: E402
 
 CASES = [(lam, slip, noise) for lam in (1.1, 1.2, 1.5, 2.0, 3.0) for slip in ("frictionless", "no-slip")

@@ -35,8 +35,10 @@ import json, sys, time
 sys.path.insert(0, sys.argv[1])
 from adhfit.exact import history as H
 import adhfit.exact as E
-from adhfit.fitting.fit import fit_curve
-from adhfit.fitting.mcmc_fit import fit_curve_mcmc
+from adhfit.fitting.api import fit as fit_curve
+from functools import partial
+from adhfit.fitting.api import fit
+fit_curve_mcmc = partial(fit, method="mcmc")
 from tests.exact_curves import exact_curve, scene
 count = {"n": 0}
 orig = H.exact_history

@@ -43,7 +43,7 @@ import json, statistics, sys, time
 from adhfit.data import read_curve
 from adhfit.scene import load_scene
 from adhfit.fitting.model import CurveModel
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.loading import history
 sample, c300, repeat = sys.argv[1], sys.argv[2], int(sys.argv[3])
 scene = load_scene(sample + "/scene.toml")

@@ -77,12 +77,11 @@ def plan(args) -> list[dict]:
 
 
 def _fit(path: Path, scene, method: str, seed: int) -> dict:
-    from adhfit.fitting import fit_curve  # noqa: PLC0415
+    from adhfit.fitting import fit  # noqa: PLC0415
     if method == "lsq":
-        return fit_curve(str(path), scene, slip="auto").as_dict()
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc  # noqa: PLC0415
-    return fit_curve_mcmc(str(path), scene, slip="auto", seed=seed, workers=1, progress=False,
-                          **MCMC_SETTINGS).as_dict()
+        return fit(str(path), scene, slip="auto").as_dict()
+    return fit(str(path), scene, method="mcmc", slip="auto", seed=seed, workers=1, progress=False,
+               **MCMC_SETTINGS).as_dict()
 
 
 def run_one(job: dict) -> dict:

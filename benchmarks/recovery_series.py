@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from adhfit.fitting.global_fit import fit_global
-from adhfit.fitting.synthetic_series import synthetic_series
+from adhfit.fitting.api import fit as fit_global
+from adhfit.fitting.synthetic import synthetic_series
 from adhfit.scene import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "sample_data" / "fea_displacement_no-slip" / "scene.toml"

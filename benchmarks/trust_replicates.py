@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.fitting.synthetic import synthetic_curve
 from tests.test_recovery import CASES, TRUE
 

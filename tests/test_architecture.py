@@ -175,7 +175,7 @@ def test_one_engine():
     assert {t.split(".")[1] for t in loading} <= {"core", "errors", "params"}
 
 
-@pytest.mark.parametrize("module", ["adhfit.fitting.fit", "adhfit.fitting.mcmc_fit", "adhfit.fitting.global_fit"])
+@pytest.mark.parametrize("module", ["adhfit.fitting.api", "adhfit.fitting.stage", "adhfit.fitting.sampling"])
 def test_fitting_does_not_reach_the_report_or_the_command_line(module):
     """The fitting modules the command line calls never import reports or the command line (at any depth)."""
     seen, todo = set(), [module]
@@ -186,6 +186,24 @@ def test_fitting_does_not_reach_the_report_or_the_command_line(module):
         seen.add(m)
         todo += [t for t, _ in GRAPH.get(m, []) if t != "adhfit" and (m, t) not in LAZY_HOOKS]
     assert not [m for m in seen if _layer(m) > 5]
+
+
+def test_one_fit_path_no_twins_and_no_private_reach():
+    """A curve is a series of one: fitting/ and report/ hold no ``global_*`` / ``series*`` twin modules, and
+    no module of the package imports another module's private name (``from .x import _y``)."""
+    import ast
+    root = Path(__file__).resolve().parents[1] / "adhfit"
+    twins = [p.name for p in (root / "fitting").glob("*.py")
+             if p.stem.startswith(("global_", "series")) or p.stem.endswith("_mcmc") or p.stem.startswith("mcmc_")]
+    assert not twins
+    private = []
+    for path in (root / "fitting").rglob("*.py"):  # report/ is checked by its own test
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom):
+                private += [f"{path.relative_to(root)}: {a.name}" for a in node.names
+                            if a.name.startswith("_") and not a.name.startswith("__")]
+    assert not private, private
+    assert len(list((root / "fitting").glob("*.py"))) <= 26
 
 
 def test_report_has_one_writer_per_format():
@@ -199,6 +217,10 @@ def test_report_has_one_writer_per_format():
         keys = {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value in
                 ("curves", "mcmc", "sampling", "segments", "fits")}
         assert keys == set(), f"{writer}.py reads report keys {keys}: build the section in sections.py"
+    private = [f"{path.name}: {a.name}" for path in (PACKAGE / "report").glob("*.py")
+               for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if isinstance(node, ast.ImportFrom)
+               for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+    assert private == [], "report/ imports another module's private name"
 
 
 def test_report_files_are_written_through_one_atomic_helper():

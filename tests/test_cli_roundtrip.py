@@ -113,11 +113,11 @@ SAMPLE = Path(__file__).resolve().parents[1] / "sample_data" / "fea_displacement
 @pytest.fixture
 def no_fit(monkeypatch):
     """Fail loudly if a fit starts: the output folder must be refused before."""
-    import adhfit.fitting.fit as fit_module
+    import adhfit.fitting.stage as stage
 
     def boom(*a, **k):
         raise AssertionError("the fit ran before the output folder was checked")
-    monkeypatch.setattr(fit_module, "fit_curve", boom)
+    monkeypatch.setattr(stage, "least_squares", boom)
 
 
 @pytest.mark.parametrize("make", ["file", "under_file"])

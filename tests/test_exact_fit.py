@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from adhfit.errors import DataError, InputError
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.fitting.lsq import fit_slip
-from adhfit.fitting.membrane_choice import approximation_effect
+from adhfit.fitting.membrane import approximation_effect
 from adhfit.fitting.model import CurveModel
 from adhfit.scene import load_scene
 
@@ -53,7 +53,7 @@ def _check_recovery(result, truth, tol=0.02):
 def test_model_choice_when_the_large_stretch_optimum_is_outside_the_exact_domain():
     """No exact history at the large-stretch optimum: the approximation is off beyond any data, so auto
     picks the exact membrane and a large-stretch request says so (instead of 'effect unknown')."""
-    from adhfit.fitting.membrane_choice import decide
+    from adhfit.fitting.membrane import decide
     auto = decide({}, 1.1, "auto", ("no-slip",))
     assert auto["membrane"] == "exact" and "no history" in auto["why"] and "no-slip" in auto["why"]
     ls = decide({}, 1.1, "large-stretch", ("no-slip",))

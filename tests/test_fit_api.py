@@ -77,7 +77,7 @@ def test_a_sequence_of_curves_is_one_global_fit(curve):
 
 def test_cli_mcmc_goes_through_the_same_path(tmp_path, capsys):
     from adhfit.cli import main
-    from adhfit.fitting.measured import measured_frame
+    from adhfit.fitting.synthetic import measured_frame
     frame, _ = measured_frame(_scene(), "no-slip", mu_h=2.0, work_of_adhesion=0.4, x_max=6e-4, rows=80,
                               noise=0.005, seed=2)
     frame.to_csv(tmp_path / "curve.csv", index=False)
@@ -93,3 +93,21 @@ def test_cli_mcmc_goes_through_the_same_path(tmp_path, capsys):
     assert d["method"] == "mcmc" and d["seed"] == 1
     assert abs(d["parameters"]["work_of_adhesion"]["value"] / 0.4 - 1) < 0.05
     assert "MCMC" in capsys.readouterr().out
+
+
+def test_a_toy_observable_is_one_registry_entry(curve, monkeypatch):
+    """A secondary observable is one entry of OBSERVABLES: a toy one (the model's contact radius read back
+    from a column the curve carries) is fitted as a block of its own and listed in ``observables``."""
+    from adhfit.fitting import observables
+    truth = adhfit.fit(curve, _scene(), slip="no-slip", profile=False)
+    model_a = observables.OBSERVABLES["contact_radius"].model
+    toy = observables.Observable(name="toy", unit="m", label="toy radius", read=lambda c: c.time, model=model_a)
+    monkeypatch.setitem(observables.OBSERVABLES, "toy", toy)
+    rng = np.random.default_rng(5)
+    from adhfit.fitting.model import CurveModel
+    m = CurveModel(curve, _scene(), "no-slip")
+    a = model_a(m, 0.4, 2.0, 2e-5)
+    with_toy = dataclasses.replace(curve, time=a + rng.normal(0.0, 2e-6, a.size))
+    r = adhfit.fit(with_toy, _scene(), slip="no-slip", profile=False)
+    assert r.observables == ("force", "toy") and truth.observables == ("force",)
+    assert r.parameters["work_of_adhesion"].value == pytest.approx(0.4, rel=0.03)

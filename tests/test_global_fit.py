@@ -18,10 +18,10 @@ import pandas as pd
 import pytest
 
 from adhfit.errors import InputError
-from adhfit.fitting.global_fit import fit_global
+from adhfit.fitting.api import fit as fit_global
 from adhfit.fitting.model import CurveModel, Segments
-from adhfit.fitting.series import radius_data, radius_prediction
-from adhfit.fitting.synthetic_series import synthetic_series
+from adhfit.fitting.observables import OBSERVABLES, contact_radius_model as radius_prediction
+from adhfit.fitting.synthetic import synthetic_series
 from adhfit.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -139,7 +139,7 @@ def test_radius_model_zero_outside_contact_and_missing_rows_counted():
     skipped and counted, 0 rows are used."""
     import dataclasses
     (curve, scene, truth), = _series(11, radius_noise=None, pressures=(1200.0,))
-    from adhfit.fitting.synthetic_series import true_contact_radius
+    from adhfit.fitting.synthetic import true_contact_radius
     a_true = true_contact_radius(scene, "no-slip", curve, truth)
     seg = Segments(n=len(curve.x), i_turn=curve.i_turn, i_jump=truth["i_jump"])
     model = CurveModel(curve, scene, "no-slip", segments=seg, fixed_split=True)
@@ -149,14 +149,14 @@ def test_radius_model_zero_outside_contact_and_missing_rows_counted():
     assert np.max(np.abs(a - a_true)[inside]) < 5e-3 * a_true.max()
     meas = a_true.copy()
     meas[[40, 41, 42]] = np.nan
-    rd = radius_data(dataclasses.replace(curve, contact_radius=meas))
+    rd = OBSERVABLES["contact_radius"].rows(dataclasses.replace(curve, contact_radius=meas))
     assert rd.n_missing == 3 and rd.rows.size == meas.size - 3 and rd.n_zero == int(np.sum(a_true == 0.0))
 
 
 def test_bad_input_is_one_clear_error():
     (curve, scene, _), = _series(5, radius_noise=None, pressures=(1200.0,), rows=60)
-    with pytest.raises(InputError, match="at least 2 curves"):
-        fit_global([curve], [scene])
+    one = fit_global([curve], [scene], profile=False)  # a series of one is a single-curve fit
+    assert one.curves == () and one.n_points == len(curve.x) and "curves" not in one.as_dict()
     with pytest.raises(InputError, match="sigma_contact_radius"):
         fit_global([curve, curve], scene, sigma_contact_radius=-1.0)
     with pytest.raises(InputError, match="method"):
@@ -200,7 +200,7 @@ def test_radius_noise_reference_ignores_rows_not_in_contact():
     """The reduced χ² of a contact-radius column is taken against its row-to-row noise from the rows in
     contact only: 60 rows measured 0 (no noise) before 240 noisy rows leave the estimate within 20 % of
     the true σ (the median-absolute-deviation estimate of 240 rows scatters by ~8 %; seeded)."""
-    from adhfit.fitting.series_checks import radius_noise
+    radius_noise = OBSERVABLES["contact_radius"].noise
     rng = np.random.default_rng(3)
     t = np.linspace(0.0, 3.0, 240)
     sigma = 4e-6

@@ -18,16 +18,12 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from adhfit.fitting.global_mcmc import SeriesTarget
+from adhfit.fitting.posterior import Target as SeriesTarget
 from adhfit.fitting.lsq import Parametrisation
 from adhfit.fitting.model import CurveModel, Segments
-from adhfit.fitting.series import (
-    Member,
-    SeriesParametrisation,
-    radius_data,
-    radius_prediction,
-)
-from adhfit.fitting.synthetic_series import synthetic_series
+from adhfit.fitting.objective import Block, Member, SharedParametrisation, objective_residual
+from adhfit.fitting.observables import OBSERVABLES, contact_radius_model as radius_prediction
+from adhfit.fitting.synthetic import synthetic_series
 from adhfit.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,10 +47,17 @@ class _Best:
 class _Fit:
     def __init__(self, members, given):
         self.members, self.given = members, given
-        self.spar = SeriesParametrisation(tuple(m.par for m in members))
+        self.spar = SharedParametrisation(tuple(m.par for m in members))
+        for m in members:
+            for b in m.blocks:
+                b.given = given["contact_radius"]
         names = ["ln_work_of_adhesion", "ln_mu_h"] + [f"{n}_{i}" for i in range(len(members))
                                                       for n in ("x_offset", "force_offset")]
         self.best = _Best(names)
+
+    @property
+    def residual(self):
+        return objective_residual(self.members, self.spar)
 
 
 def _members(series, sigma_a):
@@ -65,8 +68,9 @@ def _members(series, sigma_a):
         model = CurveModel(curve, scene, "no-slip", segments=seg, fixed_split=True)
         par = Parametrisation(x_scale=float(np.ptp(curve.x)), f_scale=float(np.max(np.abs(curve.force))),
                               control="displacement", fit_x_offset=True, fit_force_offset=True)
+        obs = OBSERVABLES["contact_radius"]
         out.append((Member(model=model, par=par, sigma_f=truth.get("sigma", 1e-5),
-                           radius=radius_data(curve), sigma_a=sigma_a), truth))
+                           blocks=[Block(obs, obs.rows(curve), sigma_a)]), truth))
     return out
 
 
@@ -88,7 +92,8 @@ def _independent_blocks(members, theta):
         jump = (m.model.jump[0] - x_tp) / m.model.jump[1] * m.sigma_f  # one observation, in force units
         out.append((np.append(rf, jump), m.sigma_f))
         a = radius_prediction(m.model, w, mu, x_off)
-        out.append((m.radius.values - a[m.radius.rows], m.sigma_a))
+        b = m.blocks[0]
+        out.append((b.data.values - a[b.data.rows], b.sigma))
     return out
 
 
@@ -123,11 +128,11 @@ def test_likelihood_is_the_sum_of_independent_gaussian_blocks():
 def test_cli_global_mcmc_reduced_run(tmp_path, monkeypatch):
     """A short seeded run end to end (CI: 20 steps after tuning, one slip condition): the report carries
     the single-curve MCMC keys plus ``curves`` with posterior offsets, and the chains are saved."""
-    import adhfit.fitting.global_mcmc as gm
+    import adhfit.fitting.sampling as gm
     from adhfit.cli import main
     from tests.test_global_fit import _write
-    monkeypatch.setitem(gm.DEFAULTS, "max_steps", 20)
-    monkeypatch.setitem(gm.DEFAULTS, "evidence_draws", 80)
+    monkeypatch.setitem(gm.SERIES_DEFAULTS, "max_steps", 20)
+    monkeypatch.setitem(gm.SERIES_DEFAULTS, "evidence_draws", 80)
     _write(_series(8, rows=50, pressures=(900.0, 1500.0), radius_noise=None), tmp_path / "data")
     out = tmp_path / "out"
     assert main(["fit", str(tmp_path / "data"), "--global", "--method", "mcmc", "--slip", "no-slip",
@@ -158,7 +163,7 @@ def test_global_mcmc_recovers_a_three_pressure_series():
     refitted over several tuning rounds this run hit the 400-step cap unconverged, τ ~10 steps; now
     τ ~5 steps, ~40 s on the shared 2-core machine; the sampler part has a CI variant in
     tests/test_mcmc.py::test_tuning_rounds_fix_a_skewed_posterior_with_a_poor_start.)"""
-    from adhfit.fitting.global_fit import fit_global
+    from adhfit.fitting.api import fit as fit_global
     series = _series(20261202, rows=160, pressures=(800.0, 1200.0, 1600.0))
     r = fit_global([c for c, _, _ in series], [s for _, s, _ in series], method="mcmc", seed=11,
                    mcmc={"progress": False})
@@ -179,7 +184,7 @@ def test_start_covariance_scale_is_corrected_against_the_posterior():
     """A least-squares standard error 30 times too small on one coordinate (a kink seen by a finite
     difference) is corrected from the log posterior itself: for a Gaussian target with a known
     covariance the corrected scales are within 15 % of the true ones, the right ones are left alone."""
-    from adhfit.fitting.global_mcmc import checked_covariance
+    from adhfit.fitting.posterior import checked_covariance
     rng = np.random.default_rng(1)
     a = rng.normal(size=(4, 4))
     cov = a @ a.T + 4 * np.eye(4)
@@ -197,9 +202,10 @@ def test_start_covariance_scale_is_corrected_against_the_posterior():
 def test_a_rejected_condition_need_not_converge_only_when_negligible():
     """The convergence rule of a series: a condition the least-squares fit rejects (ΔBIC > 100) may stay
     unconverged only while its probability, raised by 20 Monte-Carlo standard errors, stays < 1e-6."""
-    from adhfit.fitting.global_mcmc import _converged, _rejected
-    assert _rejected({"no-slip": -1000.0, "frictionless": -850.0}) == {"frictionless"}
-    assert _rejected({"no-slip": -1000.0, "frictionless": -950.0}) == set()
+    from adhfit.fitting.sampling import _converged, _rejected
+    from types import SimpleNamespace as NS
+    assert _rejected({"no-slip": NS(bic=-1000.0), "frictionless": NS(bic=-850.0)}) == {"frictionless"}
+    assert _rejected({"no-slip": NS(bic=-1000.0), "frictionless": NS(bic=-950.0)}) == set()
     diags = {"no-slip": {"converged": True}, "frictionless": {"converged": False}}
     tiny = {"probabilities": {"no-slip": 1.0, "frictionless": 1e-40}, "log_bayes_factor_stderr": 0.5}
     assert _converged(diags, tiny, {"frictionless"})

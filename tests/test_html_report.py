@@ -49,7 +49,7 @@ def test_text_is_escaped_and_nothing_is_external():
 
 
 def test_write_html_from_a_real_fit(tmp_path):
-    from adhfit.fitting import fit_curve
+    from adhfit.fitting import fit as fit_curve
     result = fit_curve(SAMPLE / "curve.csv", SAMPLE / "scene.toml", slip="no-slip", profile=False, seed=3)
     path = write_html(result, tmp_path / "report.html")  # draws the fit plot itself
     page = path.read_text(encoding="utf-8")

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-from adhfit.fitting.diagnostics import diagnose
+from adhfit.fitting.chains import diagnose
 from adhfit.fitting.mcmc import sample_posterior
 from adhfit.fitting.posterior import Prior
 
@@ -146,7 +146,9 @@ def test_seeded_runs_repeat_and_hdf5(tmp_path):
 
 @pytest.fixture(scope="module")
 def small_fit(tmp_path_factory):
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc
+    from functools import partial  # noqa: PLC0415
+    from adhfit.fitting.api import fit  # noqa: PLC0415
+    fit_curve_mcmc = partial(fit, method="mcmc")
     from adhfit.fitting.synthetic import synthetic_curve
     from adhfit.scene import Scene
     LsScene = functools.partial(Scene, membrane_model="large-stretch")
@@ -191,10 +193,12 @@ def test_same_residual_as_least_squares(small_fit):
     assert tg_names[:2] == ["work_of_adhesion", "mu_h"]
     model = CurveModel(res.curve, _scene(), "no-slip")
     raw = fit_slip(model)
+    from adhfit.fitting.objective import ObjectiveFit
     from adhfit.fitting.posterior import default_priors
-    tg = Target(model, raw.par, default_priors(raw.par, [raw.par.si(raw.best.params)], {}), None)
+    pri = default_priors(raw.par, [raw.par.si(raw.best.params)], {})
+    tg = Target(ObjectiveFit.from_single(raw), list(raw.par.names), [pri[n] for n in raw.par.names])
     theta = ch.flat[0]
-    r = tg.residual(theta) * tg.scale
+    r = tg.residual(theta) * raw.scale
     rss, n = float(r @ r), r.size
     num, _ = integrate.quad(lambda ls: math.exp(-n * ls - 0.5 * rss * math.exp(-2 * ls)
                                                 - 0.5 * n * math.log(2 * math.pi) + 0.5 * n * math.log(rss)),
@@ -230,7 +234,9 @@ def test_outputs_and_human_report(small_fit):
 
 def test_two_processes_give_the_same_posterior(small_fit, tmp_path):
     """workers=2 samples each slip condition in its own forked process: same seeds, same chains."""
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc
+    from functools import partial  # noqa: PLC0415
+    from adhfit.fitting.api import fit  # noqa: PLC0415
+    fit_curve_mcmc = partial(fit, method="mcmc")
     res, _, _ = small_fit
     two = fit_curve_mcmc(res.curve, _scene(), seed=11, outdir=tmp_path, workers=2, progress=False, n_walkers=6,
                          n_ensembles=2, tune_steps=10, max_steps=15, evidence_draws=60, predictive_draws=8)

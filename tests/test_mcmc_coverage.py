@@ -22,7 +22,9 @@ TRUTH = {"work_of_adhesion": 0.4, "mu_h": 2.0}
 
 
 def _replicate(seed: int, **settings) -> dict:
-    from adhfit.fitting.mcmc_fit import fit_curve_mcmc
+    from functools import partial  # noqa: PLC0415
+    from adhfit.fitting.api import fit  # noqa: PLC0415
+    fit_curve_mcmc = partial(fit, method="mcmc")
     from adhfit.fitting.synthetic import synthetic_curve
     from adhfit.scene import Scene
     LsScene = functools.partial(Scene, membrane_model="large-stretch")

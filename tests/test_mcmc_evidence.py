@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from adhfit.fitting.evidence import StudentT, importance_evidence, model_probabilities
+from adhfit.fitting.selection import StudentT, importance_evidence, model_probabilities
 
 
 def _linear_problem(seed: int, n: int = 30, k: int = 3, sigma: float = 0.5, s: float = 2.0):
@@ -98,7 +98,7 @@ def test_student_t_matches_scipy():
 
 class _Ev:
     def __init__(self, lz, se=0.01, ess=500.0):
-        from adhfit.fitting.evidence import EvidenceEstimate
+        from adhfit.fitting.selection import EvidenceEstimate
         self.e = EvidenceEstimate(lz, se, ess, 1000)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from adhfit.cli.painter import Painter
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.fitting.synthetic import synthetic_curve
 from adhfit.report.fit_plot import draw_fit, fit_view
 from adhfit.scene import Scene

@@ -10,7 +10,7 @@ import pytest
 
 from adhfit.data import read_curve
 from adhfit.errors import DataError
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.fitting.plausibility import check_curve, compress_lines
 from adhfit.scene import load_scene
 

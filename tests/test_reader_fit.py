@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 
 HERE = Path(__file__).resolve().parent / "data" / "instruments"
 SCENE = HERE / "scene.toml"

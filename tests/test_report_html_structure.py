@@ -226,7 +226,7 @@ def test_summary_page_escapes_errors(tmp_path, bad):
 
 def test_fit_result_renders_itself_in_a_notebook():
     """``FitResult._repr_html_`` is the report's own results table (units, status), not raw reprs."""
-    from adhfit.fitting import fit_curve
+    from adhfit.fitting import fit as fit_curve
     sample = Path(__file__).resolve().parents[1] / "sample_data" / "fea_displacement_no-slip"
     result = fit_curve(sample / "curve.csv", sample / "scene.toml", slip="no-slip", profile=False)
     html = result._repr_html_()

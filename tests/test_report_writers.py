@@ -194,11 +194,11 @@ def test_a_figure_is_saved_atomically(tmp_path):
 def test_every_file_report_write_puts_down_is_renamed_into_place(tmp_path, monkeypatch):
     """report.write of a real fit: each file it returns arrives by os.replace from a temporary file of the
     same folder (an interrupted run leaves the old file or the new one, never part of one)."""
+    import adhfit
     import adhfit.report.files as files
-    from adhfit.fitting import fit_curve
     from adhfit.report import write
     sample = ROOT / "sample_data" / "fea_displacement_no-slip"
-    result = fit_curve(sample / "curve.csv", sample / "scene.toml", slip="no-slip", profile=False)
+    result = adhfit.fit(sample / "curve.csv", sample / "scene.toml", slip="no-slip", profile=False)
     moved = []
     real = os.replace
 

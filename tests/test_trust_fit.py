@@ -14,7 +14,7 @@ import pytest
 from scipy import stats
 
 from adhfit.data import Curve
-from adhfit.fitting.fit import fit_curve
+from adhfit.fitting.api import fit as fit_curve
 from adhfit.fitting.synthetic import synthetic_curve
 from adhfit.scene import Scene
 

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from adhfit.fitting.mcmc_fit import _verdict
+from adhfit.fitting.sampling import _verdict
 from adhfit.fitting.model import CurveModel
-from adhfit.fitting.residual_checks import correlation_factor
+from adhfit.fitting.checks import correlation_factor
 from adhfit.fitting.selection import compare, evidence_word
 from adhfit.fitting.starts import contact_offset
 from adhfit.fitting.synthetic import synthetic_curve

@@ -9,10 +9,8 @@ import argparse
 from pathlib import Path
 
 from ..errors import InputError
-from ..fitting.options import DEFAULT_POINTS, METHODS, SLIP_CHOICES
-
-#: ``--membrane`` choices (adhfit.scene.MEMBRANE_MODELS; repeated here to keep the parser's imports light)
-MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
+from ..fitting.options import DEFAULT_POINTS
+from ..params import MEMBRANE_CHOICES, METHODS, SLIP_CHOICES
 
 __all__ = ["add_fit_arguments", "read_options", "fit_x_offset", "fit_force_offset", "MEMBRANE_CHOICES"]
 
@@ -119,11 +117,11 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
                         "tcp://10.0.0.5:8786 (pip install 'adhfit[dask]'; files on a shared disk)")
     p.add_argument("--global", dest="global_fit", action="store_true",
                    help="several curves of one membrane and substrate: one W_ad, one mu*h and one slip condition, "
-                        "offsets per curve (the load-cell zero always fitted), each curve its own scene (docs/contracts.md A7)")
+                        "offsets per curve, each curve its own scene (docs/contracts.md A7)")
     p.add_argument("--sigma-radius", default=None, metavar="LENGTH",
-                   help="with --global: contact-radius noise, e.g. '2 um' (default: estimated per curve)")
+                   help="contact-radius noise, e.g. '2 um' (default: estimated per curve)")
     p.add_argument("--no-contact-radius", action="store_true",
-                   help="with --global: do not fit the contact_radius column")
+                   help="do not fit the contact_radius column (fitted by default where a curve has one)")
     return p
 
 

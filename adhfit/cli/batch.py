@@ -51,7 +51,7 @@ from ..errors import AdhfitError, InputError
 
 #: modules a local worker needs, imported once by a fork server (where the workers are not forked from
 #: this process)
-PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.fit", "adhfit.data", "adhfit.scene", "adhfit.report.json_report",
+PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.stage", "adhfit.data", "adhfit.scene", "adhfit.report.json_report",
            "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot", "matplotlib")
 
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",

@@ -44,8 +44,8 @@ def _fit_one(args, painter, engine) -> int:
     """One curve: read, fit (least squares or MCMC), write the reports, print the summary."""
     from . import batch  # noqa: PLC0415
     from ..data import read_curve  # noqa: PLC0415
-    from ..fitting.fit import fit_curve  # noqa: F401, PLC0415 - lmfit loads while the kernels load (thread)
-    from ..fitting.api import fit  # noqa: PLC0415
+    from ..fitting.api import fit  # noqa: PLC0415 - lmfit loads while the kernels load (thread)
+    from ..fitting import stage  # noqa: F401, PLC0415
     from ..report import write  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
@@ -53,6 +53,8 @@ def _fit_one(args, painter, engine) -> int:
         args.scene = batch.single_scene(args.data)
     out = check_output_dir(args.output if args.output is not None else Path(f"{Path(args.data).stem}_fit"))
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
+    sigma_a = None if getattr(args, "sigma_radius", None) is None else \
+        parse_quantity(args.sigma_radius, "length", name="--sigma-radius")
     scene = load_scene(args.scene)
     curve = read_curve(args.data, scene.control, **read_options(args))
     quiet = getattr(args, "quiet", False)
@@ -63,7 +65,9 @@ def _fit_one(args, painter, engine) -> int:
     with elapsed(f"fitting {Path(args.data).name}", enabled=False if quiet else None):
         result = fit(curve, scene, method=args.method, slip=args.slip, sigma=sigma,
                      fit_x_offset=fit_x_offset(args, scene.control), fit_force_offset=fit_force_offset(args),
-                     seed=args.seed, points=args.points, membrane=getattr(args, "membrane", None), **by_method)
+                     seed=args.seed, points=args.points, membrane=getattr(args, "membrane", None),
+                     contact_radius=not getattr(args, "no_contact_radius", False), sigma_contact_radius=sigma_a,
+                     **by_method)
     drawn = ()
     if painter is not None:
         from ..report.fit_plot import fit_view  # noqa: PLC0415

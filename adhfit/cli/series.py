@@ -36,7 +36,7 @@ def run_global(args) -> int:
     from ..report import write  # noqa: PLC0415
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
-    from .arguments import fit_x_offset, read_options  # noqa: PLC0415
+    from .arguments import fit_force_offset, fit_x_offset, read_options  # noqa: PLC0415
     from .writing import check_output_dir  # noqa: PLC0415
     out = check_output_dir(args.output if args.output is not None else Path("adhfit_global_fit"))
     jobs = _jobs(args)
@@ -49,11 +49,12 @@ def run_global(args) -> int:
     fit_x = fit_x_offset(args, scenes[0].control) if len(controls) == 1 else None
     slips = {sc.slip for sc in scenes}
     slip = args.slip or (slips.pop() if len(slips) == 1 else "auto")
-    mcmc = {"outdir": out, "progress": False if getattr(args, "quiet", False) else None}
+    by_method = ({"outdir": out, "progress": False if getattr(args, "quiet", False) else None}
+                 if args.method == "mcmc" else {"profile": not args.no_profile})
     result = fit(curves, scenes, method=args.method, slip=slip, sigma=sigma, sigma_contact_radius=sigma_a,
                  contact_radius=not getattr(args, "no_contact_radius", False), fit_x_offset=fit_x,
-                 fit_force_offset=True, seed=args.seed, points=args.points, profile=not args.no_profile,
-                 mcmc=mcmc if args.method == "mcmc" else None)
+                 fit_force_offset=fit_force_offset(args), seed=args.seed, points=args.points,
+                 membrane=getattr(args, "membrane", None), **by_method)
     write(result, out, plot=not args.no_plot)
     print(_summary(result, out))
     return 0

@@ -4,7 +4,7 @@ Sampler
 -------
 ``n_ensembles`` independent emcee ``EnsembleSampler`` ensembles of ``n_walkers`` walkers (default 4 × 16),
 each with its own seed, are run side by side so that R-hat compares independent ensembles
-(:mod:`.diagnostics`).  Walkers start in a ball around the least-squares optimum: θ_lsq plus one
+(:mod:`.chains`).  Walkers start in a ball around the least-squares optimum: θ_lsq plus one
 least-squares standard error times a standard normal draw per coordinate.
 
 Moves (a mixture; each step picks one): an *independence* Metropolis-Hastings move (90 %) proposing
@@ -58,7 +58,7 @@ import numpy as np
 
 from ..errors import InputError
 from .chains import Chains, open_chain, save_chains
-from .evidence import StudentT
+from .selection import StudentT
 from .posterior import Target
 
 __all__ = ["Chains", "IndependenceMove", "sample_posterior", "save_chains", "open_chain", "ParallelMap",

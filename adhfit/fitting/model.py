@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import AdhfitError, InputError
 from ..loading import history
+from ..params import SLIP_CONDITIONS
 from .options import DEFAULT_POINTS
 from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
@@ -200,8 +201,8 @@ class CurveModel:
     def __init__(self, curve, scene, slip: str, *, points: int = DEFAULT_POINTS,
                  segments: Segments | None = None, fixed_split: bool = False,
                  membrane: str = "large-stretch") -> None:
-        if slip not in ("no-slip", "frictionless"):
-            raise InputError("slip", slip, "one of 'no-slip', 'frictionless'")
+        if slip not in SLIP_CONDITIONS:
+            raise InputError("slip", slip, "one of " + ", ".join(map(repr, SLIP_CONDITIONS)))
         if curve.control != scene.control:
             raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
         self.curve, self.scene, self.slip, self.points = curve, scene, slip, int(points)

@@ -33,11 +33,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special, stats
 
-from .lsq import PENALTY, Parametrisation, residual_function
-from .model import CurveModel
-from .starts import noise_estimate
+from ..errors import InputError
+from .lsq import PENALTY, Parametrisation
+from .objective import Values
 
-__all__ = ["LogPosterior", "Prior", "Target", "default_priors", "DEFAULT_PRIOR_FACTOR", "INTERNAL_NAMES"]
+__all__ = ["LogPosterior", "Prior", "Target", "default_priors", "objective_priors", "checked_covariance",
+           "DEFAULT_PRIOR_FACTOR", "INTERNAL_NAMES", "SCALE_CHECK", "SHARED"]
 
 #: default log-uniform priors reach this factor below and above the least-squares estimates
 DEFAULT_PRIOR_FACTOR = 100.0
@@ -132,13 +133,6 @@ def default_priors(par: Parametrisation, lsq_values: list[dict], scene_priors: d
     return out
 
 
-class _Values(dict):
-    """A dict that answers ``valuesdict()`` like lmfit Parameters (what the shared residual reads)."""
-
-    def valuesdict(self) -> dict:
-        return self
-
-
 class LogPosterior:
     """What a target needs besides its likelihood: ``ndim``, the prior, the posterior emcee samples and
     the map from θ back to SI values (subclasses set ``names`` and ``priors`` and define
@@ -179,56 +173,150 @@ class LogPosterior:
         return out
 
 
+SHARED = ("work_of_adhesion", "mu_h")
+
+
 class Target(LogPosterior):
-    """Log prior, log likelihood and log posterior of one slip condition in θ.
+    """Log prior, log likelihood and log posterior of one slip condition's objective, in θ.
+
+    θ are the least-squares fit's internal coordinates: ln W_ad, ln μh, then per curve its scaled offsets.
+    The likelihood is Gaussian per *block* (one curve's force rows with its pull-off term, each secondary
+    observable of each curve), every block with its own σ: given, or integrated out under p(σ) ∝ 1/σ
+    (module docstring), block by block.  One curve and its force alone is one block.
 
     Parameters
     ----------
-    model : CurveModel
-    par : Parametrisation
-        The least-squares fit's parametrisation of this slip condition.
-    priors : dict name -> Prior
-        One per ``par.names`` entry, in that order.
-    sigma : float, optional
-        Known force noise σ (N); ``None``: σ integrated out (module docstring).
+    fit : ObjectiveFit
+        The least-squares optimum (members with their settled σ's and row splits).
+    names : list of str
+        SI names of θ's coordinates (offsets suffixed with the curve's index in a series).
+    priors : list of Prior
+        One per coordinate.
     """
 
-    def __init__(self, model: CurveModel, par: Parametrisation, priors: dict[str, Prior],
-                 sigma: float | None) -> None:
-        self.model, self.par, self.sigma = model, par, sigma
-        self.names = list(par.names)
-        self.priors = [priors[n] for n in self.names]
-        self.internal = [INTERNAL_NAMES[n] for n in self.names]
-        self.scale = float(sigma) if sigma is not None else par.f_scale
-        sigma_jump = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * par.f_scale)
-        self._residual = residual_function(model, par, self.scale, sigma_jump)
-        self.n = model.force.size + (model.jump is not None)
+    def __init__(self, fit, names: list[str], priors: list[Prior]) -> None:
+        self.internal = list(fit.best.var_names)
+        if len(names) != len(self.internal) or len(priors) != len(names):
+            raise ValueError(f"{len(names)} names and {len(priors)} priors for {len(self.internal)} parameters")
+        self.names, self.priors, self.given = list(names), list(priors), dict(fit.given)
+        self.fit = fit
+        self._residual = fit.residual
+        self.blocks = []  # (start, stop, residual unit, σ given)
+        k = 0
+        for m in fit.members:
+            self.blocks.append((k, k + m.n_force, m.sigma_f, fit.given["force"]))
+            k += m.n_force
+            for b in m.blocks:
+                self.blocks.append((k, k + b.data.rows.size, b.sigma, b.given))
+                k += b.data.rows.size
 
     @property
     def noise_model(self) -> str:
-        if self.sigma is not None:
-            return f"Gaussian, sigma known ({self.sigma:.4g} N, given)"
-        return ("Gaussian, sigma unknown: integrated out analytically under the prior p(sigma) ∝ 1/sigma "
-                "(Student-t-like marginal likelihood)")
+        if len(self.blocks) == 1:
+            if self.blocks[0][3]:
+                return f"Gaussian, sigma known ({self.blocks[0][2]:.4g} N, given)"
+            return ("Gaussian, sigma unknown: integrated out analytically under the prior p(sigma) ∝ 1/sigma "
+                    "(Student-t-like marginal likelihood)")
+        known = [k for k, v in self.given.items() if v]
+        head = "Gaussian, one sigma per curve and observable"
+        if len(known) == len(self.given):
+            return head + ", all given"
+        tail = "integrated out analytically under p(sigma) ∝ 1/sigma (block by block)"
+        return head + (f"; {', '.join(known)} given, the others " if known else "; ") + tail
 
     def residual(self, theta: np.ndarray) -> np.ndarray:
-        """The shared least-squares residual at θ (units of ``self.scale``)."""
-        return self._residual(_Values(zip(self.internal, map(float, theta))))
+        """The least-squares residual at θ (each block in units of its σ)."""
+        return self._residual(Values(zip(self.internal, map(float, theta))))
 
     def log_likelihood(self, theta: np.ndarray) -> float:
         r = self.residual(theta)
-        if np.all(r == PENALTY):  # outside the model's domain (the residual's marker)
+        if np.any(r == PENALTY):  # a curve outside the model's domain (the residual's marker)
             return -math.inf
-        ss = float(r @ r)
-        if self.sigma is not None:
-            return -0.5 * ss - 0.5 * self.n * math.log(2.0 * math.pi * self.sigma**2)
-        rss = ss * self.scale**2
-        return math.log(0.5) + special.gammaln(0.5 * self.n) - 0.5 * self.n * math.log(math.pi * rss)
+        total = 0.0
+        for lo, hi, sigma, given in self.blocks:
+            ss, n = float(r[lo:hi] @ r[lo:hi]), hi - lo
+            if given:
+                total += -0.5 * ss - 0.5 * n * math.log(2.0 * math.pi * sigma**2)
+            else:
+                total += math.log(0.5) + special.gammaln(0.5 * n) - 0.5 * n * math.log(math.pi * ss * sigma**2)
+        return total
 
-    def from_si(self, values: dict) -> np.ndarray:
-        """SI dict (as :meth:`Parametrisation.si` gives) -> θ."""
-        out = []
-        for name, prior in zip(self.names, self.priors):
-            key = name if name in values else ("force_offset" if name == "force_offset" else "x_offset")
-            out.append(math.log(values[key]) if prior.log else values[key] / prior.factor)
-        return np.array(out)
+    def theta0(self) -> np.ndarray:
+        """The least-squares optimum in θ."""
+        return np.array([self.fit.best.params[n].value for n in self.internal])
+
+
+def _scene_priors(scenes) -> dict:
+    first = dict(scenes[0].priors)
+    for sc in scenes[1:]:
+        if dict(sc.priors) != first:
+            raise InputError("[priors]", f"{sc.source}", "the same [priors] table in every curve's scene "
+                             "(the shared W_ad and μh have one prior); remove it or make them agree")
+    return first
+
+
+def objective_priors(fits: dict, scenes) -> tuple[list[str], list[Prior]]:
+    """Coordinate names and priors of the posterior (the same for every slip condition).
+
+    Per curve :func:`default_priors` with that curve's least-squares offsets and the W_ad and μh of every
+    slip condition; the shared values' priors are curve 0's (they use only the shared estimates, so every
+    curve gives the same)."""
+    scene_priors = _scene_priors(scenes)
+    first = next(iter(fits.values()))
+    si = [f.si() for f in fits.values()]
+    names, priors = [], []
+    for i, m in enumerate(first.members):
+        pri = default_priors(m.par, [{**shared, **offs[i]} for shared, offs in si], scene_priors)
+        for name in m.par.names:
+            if name in SHARED and i > 0:
+                continue
+            names.append(name if name in SHARED or len(first.members) == 1 else f"{name}_{i}")
+            priors.append(pri[name])
+    return names, priors
+
+
+#: the start covariance's scale along a coordinate is widened when the posterior's own scale there
+#: exceeds it by more than this factor (never narrowed: :func:`checked_covariance`)
+SCALE_CHECK = 2.0
+
+
+def checked_covariance(target, theta0: np.ndarray, cov0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The start covariance with every coordinate's scale checked against the log posterior itself.
+
+    Least squares gives the covariance from a finite-difference Jacobian; a kink in the contact-radius
+    model or a rugged objective can make one standard error far too small or too large, and the
+    sampler's start ball and first proposal would inherit it.  Along each coordinate k the drop of the
+    log posterior d(h) = ln π(θ0) - ½[ln π(θ0 + h e_k) + ln π(θ0 - h e_k)] is evaluated at h = the
+    conditional standard deviation s_k = 1/sqrt((C⁻¹)_kk) (and once more at the new estimate);
+    a Gaussian gives d = h²/(2 s²).  Where the estimate exceeds s_k by more than the factor
+    :data:`SCALE_CHECK`, that row and column of C are widened (correlations kept).  A scale is never
+    narrowed: next to a curve's fold the log posterior has a square-root cusp, so its drop over one
+    step overstates the curvature (on three-curve series with the contact radius the check halved
+    scales that were already 2-7 times too small), and a too-wide start only costs the tuning some
+    acceptance while a too-narrow one slows it down.  Costs 2–4 evaluations per coordinate.
+
+    Returns
+    -------
+    (covariance, ratios) : the corrected covariance and the per-coordinate scale factors applied.
+    """
+    cov0 = np.atleast_2d(np.asarray(cov0, float))
+    lp0 = target(theta0)
+    ratio = np.ones(theta0.size)
+    if not math.isfinite(lp0):
+        return cov0, ratio
+    cond = 1.0 / np.sqrt(np.clip(np.diag(np.linalg.pinv(cov0)), 1e-300, None))
+    for k in range(theta0.size):
+        h, r, d = cond[k], 1.0, float("nan")
+        for _ in range(2):
+            e = np.zeros(theta0.size)
+            e[k] = h
+            d = lp0 - 0.5 * (target(theta0 + e) + target(theta0 - e))
+            if not math.isfinite(d):
+                break
+            est = h / math.sqrt(2.0 * d) if d > 1e-3 else 10.0 * h  # flat: look further out
+            r = float(np.clip(est / cond[k], 0.1, 30.0))
+            if abs(math.log(est / h)) < math.log(1.3):
+                break
+            h = r * cond[k]
+        ratio[k] = r if math.isfinite(d) and r > SCALE_CHECK else 1.0  # widen only (see docstring)
+    return cov0 * np.outer(ratio, ratio), ratio

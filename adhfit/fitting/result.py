@@ -153,7 +153,7 @@ class SlipFit:
         First row the fitted model puts after pull-off (``None``: the data end before it).
     autocorrelation, widening : float
         Lag-1 autocorrelation of the residuals and the factor the intervals were widened by
-        (:mod:`.residual_checks`).
+        (:mod:`.checks`).
     """
 
     slip: str

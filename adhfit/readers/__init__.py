@@ -1,21 +1,18 @@
-"""Reading measured curves as instruments write them (docs/contracts.md A4b).
+"""Reading measured curves as instruments write them (docs/contracts.md A4, A4b).
 
-:mod:`.text` decodes a file and finds its layout (separator, decimal mark, metadata lines, header,
-units row, data lines); :mod:`.lvm` does the same for LabVIEW ``.lvm`` files from their header
-blocks; :mod:`.columns` maps header cells to adhfit's columns (aliases, units, overrides) and
-raises one-line errors for what stays ambiguous.  :func:`adhfit.data.read_curve` puts them together.
+:data:`FORMATS` (:mod:`.formats`) is the one list of the file formats adhfit reads: how each is
+recognised (first bytes or suffix), how its bytes become tables of text lines and how a table's
+layout is found.  :mod:`.text` decodes text and finds the layout of delimited text (separator,
+decimal mark, metadata lines, header, units row, data lines); :mod:`.lvm` does the same for LabVIEW
+``.lvm`` files from their header blocks; :mod:`.xlsx` writes each sheet of an Excel workbook as
+lines; :mod:`.columns` maps header cells to adhfit's columns (aliases, units, overrides) and raises
+one-line errors for what stays ambiguous.  :func:`adhfit.data.read_curve` puts them together.
 """
 from __future__ import annotations
 
 from .columns import ALIASES, Assignment, assign
-from .lvm import lvm_layout
-from .text import Layout, is_lvm, read_lines, text_layout
+from .formats import FORMATS, Format, find_format, folder_patterns
+from .text import Layout, Table, read_lines
 
-
-def detect_layout(lines: list[str], where: str, *, lvm: bool = False) -> Layout:
-    """Find the layout of a curve file's lines: LabVIEW ``.lvm`` (when ``lvm``, or recognised from its
-    first line, :mod:`.lvm`) or delimited text (:mod:`.text`)."""
-    return lvm_layout(lines, where) if lvm or is_lvm(lines) else text_layout(lines, where)
-
-
-__all__ = ["ALIASES", "Assignment", "Layout", "assign", "detect_layout", "read_lines"]
+__all__ = ["ALIASES", "Assignment", "FORMATS", "Format", "Layout", "Table", "assign", "find_format",
+           "folder_patterns", "read_lines"]

@@ -14,7 +14,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from ..errors import DataError, InputError
+from ..errors import DataError, InputError, clip, shown
 from ..units import DIMENSIONS, unit_factor
 
 __all__ = ["ALIASES", "COLUMNS", "REQUIRED", "OPTIONAL", "EXAMPLE", "Assignment", "assign", "role_of",
@@ -125,10 +125,20 @@ class Assignment:
     inferred: dict[str, str] = field(default_factory=dict)
 
 
+#: Header cells listed in a message at most (a 5,000-column header is summarised, not printed).
+_LISTED = 12
+
+
+def listed(cells: list[str]) -> str:
+    """Header cells for a message: each cut (:func:`adhfit.errors.shown`), at most ``_LISTED`` of them."""
+    out = ", ".join(shown(c, 40) for c in cells[:_LISTED])
+    return out + (f", and {len(cells) - _LISTED} more" if len(cells) > _LISTED else "")
+
+
 def _tail(cells: list[str], control: str) -> str:
     expected = ", ".join(repr(EXAMPLE[n]) for n in REQUIRED[control])
     optional = ", ".join(repr(EXAMPLE[n]) for n in OPTIONAL)
-    return f"found {', '.join(repr(c) for c in cells)}; expected {expected} (optional: {optional})"
+    return f"found {listed(cells)}; expected {expected} (optional: {optional})"
 
 
 def _find(role: str, name: str, cells: list[str], where: str, no: int) -> int:
@@ -137,9 +147,8 @@ def _find(role: str, name: str, cells: list[str], where: str, no: int) -> int:
             if c.strip() == name.strip() or normalise(split_cell(c)[0]) == normalise(name)]
     if len(hits) == 1:
         return hits[0]
-    found = ", ".join(repr(c) for c in cells)
     what = "no column" if not hits else f"{len(hits)} columns"
-    raise DataError(f"--columns {role}={name}: {what} of that name; the columns are {found}",
+    raise DataError(f"--columns {role}={clip(name)}: {what} of that name; the columns are {listed(cells)}",
                     path=where, line=no)
 
 
@@ -161,7 +170,7 @@ def assign(cells: list[str], control: str, *, where: str, header_no: int, units_
         role = by_index.get(j) or role_of(name) or ("time" if from_x else None)
         if j not in by_index and role in forced:
             out.ignored.append((cell, f"another {role} column (--columns {role}= chose "
-                                      f"'{cells[forced[role]]}')"))
+                                      f"'{clip(cells[forced[role]])}')"))
         elif from_x and "time" in chosen:
             out.ignored.append((cell, "another X_Value column (the first one is time)"))
         elif role is None:
@@ -179,7 +188,7 @@ def assign(cells: list[str], control: str, *, where: str, header_no: int, units_
         out.inferred[role] = f"'{cells[j]}' read as {role} from its unit {raw[j]}"
     for role, js in chosen.items():
         if len(js) > 1:
-            names = " and ".join(repr(cells[j]) for j in js)
+            names = " and ".join(shown(cells[j], 40) for j in js)
             raise DataError(f"duplicate column '{role}': {names} both read as {role}; choose one with "
                             f"--columns {role}=NAME", path=where, column=cells[js[1]], line=header_no)
     _missing(cells, chosen, other, control, where, header_no, out.ignored)
@@ -187,7 +196,7 @@ def assign(cells: list[str], control: str, *, where: str, header_no: int, units_
         _unit(out, role, j, cells, units_row, units_no, file_units, units, where, header_no)
     for role in units or {}:
         if role not in out.index:
-            raise DataError(f"--units {role}={units[role]}: the file has no {role} column; "
+            raise DataError(f"--units {role}={clip(units[role])}: the file has no {role} column; "
                             f"{_tail(cells, control)}", path=where, line=header_no)
     return out
 
@@ -232,7 +241,7 @@ def _unit(out: Assignment, role: str, j: int, cells: list[str], units_row: list[
             out.ignored.append((cell, "time without a unit (give it with --units time=s)"))
             return
         example = EXAMPLE[role]
-        raise DataError(f"bad header '{cell}': columns must be written 'name [unit]', e.g. '{example}', "
+        raise DataError(f"bad header '{clip(cell)}': columns must be written 'name [unit]', e.g. '{example}', "
                         f"or have a units row under the header; or give the unit with --units "
                         f"{role}={split_cell(example)[1]}", path=where, column=cell, line=no)
     else:
@@ -240,7 +249,7 @@ def _unit(out: Assignment, role: str, j: int, cells: list[str], units_row: list[
             out.factors[role] = unit_factor(unit, COLUMNS[role], name=cell)
         except InputError as exc:
             if role == "time":  # optional: a clock time ('hh:mm:ss') is left out and listed
-                out.ignored.append((cell, f"time in {unit!r}, not a unit of time"))
+                out.ignored.append((cell, f"time in {shown(unit)}, not a unit of time"))
                 return
             raise DataError(exc.reason, path=where, column=cell, line=line) from None
     out.index[role], out.header[role], out.units[role] = j, cell, unit
@@ -272,7 +281,7 @@ def _by_unit(chosen: dict, generic: list[int], raw: dict[int, str | None], contr
             except InputError:
                 pass
         if len(fits) > 1:
-            names = " and ".join(repr(cells[j]) for j in fits)
+            names = " and ".join(shown(cells[j], 40) for j in fits)
             raise DataError(f"{names} both have {DIMENSIONS[COLUMNS[role]][1]} unit, so either could be the "
                             f"{role}; choose one with --columns {role}=NAME", path=where, line=no)
         if fits:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 
-from ..errors import DataError
+from ..errors import DataError, shown
 from .text import Layout, _classify
 
 __all__ = ["lvm_layout"]
@@ -44,7 +44,7 @@ def lvm_layout(lines: list[str], where: str) -> Layout:
     head = _fields(lines, ends[-1], sep)
     decimal = (head.get("decimal_separator") or ["."])[0] or "."
     if decimal not in (".", ","):
-        raise DataError(f"LabVIEW Decimal_Separator {decimal!r} is not '.' or ','", path=where)
+        raise DataError(f"LabVIEW Decimal_Separator {shown(decimal)} is not '.' or ','", path=where)
     header = next((i for i in range(ends[-1] + 1, len(lines)) if lines[i].strip()), None)
     if header is None:
         raise DataError("LabVIEW file without column names after its header", path=where)

@@ -18,9 +18,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import DataError
+from ..units import is_unit
 from .columns import role_of, split_cell
 
-__all__ = ["Layout", "read_lines", "text_layout", "is_lvm", "split_line", "is_number"]
+__all__ = ["Layout", "Table", "MAX_LINE_CHARS", "read_bytes", "decode", "read_lines", "text_layout", "is_lvm",
+           "split_line", "is_number", "check_line_lengths"]
 
 #: Lines used to find the layout (the header of any real export is far above this).
 _SNIFF_LINES = 2000
@@ -65,16 +67,58 @@ class Layout:
     description: str = ""
 
 
-def read_lines(path: str | Path, where: str) -> tuple[bytes, list[str], str]:
-    """The file's bytes, its lines (line n is ``lines[n - 1]``) and the encoding used."""
+#: Longest line of a curve file, in characters.  A real export's widest line (hundreds of columns)
+#: is a few thousand; past this no cell is a number, a name or a unit, and Python's csv module
+#: refuses fields over 131,072 characters anyway.
+MAX_LINE_CHARS = 65_536
+
+
+@dataclass(frozen=True)
+class Table:
+    """One table a curve may be read from (a text file, or one sheet of a workbook).
+
+    Attributes
+    ----------
+    where : str
+        The file (and sheet) for messages, e.g. ``"run.xlsx, sheet 'Data'"``.
+    lines : list of str
+        The table's rows as text lines; line ``n`` is ``lines[n - 1]`` (a sheet's row ``n``).
+    note : str
+        How the bytes were read, for :attr:`adhfit.data.Curve.layout` (the encoding, the sheet).
+    sheet : str or None
+        The sheet's name, for a workbook.
+    """
+
+    where: str
+    lines: list[str]
+    note: str = ""
+    sheet: str | None = None
+
+
+def read_bytes(path: str | Path, where: str) -> bytes:
+    """The file's bytes; a one-line error for an unreadable or empty file."""
     try:
         raw = Path(path).read_bytes()
     except OSError as exc:
         raise DataError(f"cannot read the file ({exc.strerror or exc})", path=where) from None
     if not raw.strip():
         raise DataError("the file is empty", path=where)
+    return raw
+
+
+def decode(raw: bytes, where: str) -> tuple[list[str], str]:
+    """A text file's lines (line n is ``lines[n - 1]``) and the encoding used.
+
+    UTF-16 with a byte-order mark, else UTF-8 (with or without one), else Latin-1.  A file with NUL
+    bytes that is not UTF-16 is binary (an instrument's own format, a zip, an image): refused by name.
+    A line longer than :data:`MAX_LINE_CHARS` is refused with its number.
+    """
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        text, encoding = raw.decode("utf-16"), "UTF-16"
+        text, encoding = raw.decode("utf-16", errors="replace"), "UTF-16"
+    elif b"\x00" in raw[:65536]:
+        raise DataError("a binary file, not a text export (it holds NUL bytes; or UTF-16 text without a "
+                        "byte-order mark); adhfit reads delimited text, LabVIEW .lvm and Excel .xlsx: export the "
+                        "curve as CSV (UTF-8) or .xlsx", path=where)
     else:
         try:
             text, encoding = raw.decode("utf-8-sig"), "UTF-8" + (" with BOM" if raw[:3] == b"\xef\xbb\xbf" else "")
@@ -83,6 +127,24 @@ def read_lines(path: str | Path, where: str) -> tuple[bytes, list[str], str]:
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     if lines and lines[-1] == "":
         lines.pop()
+    check_line_lengths(lines, where)
+    return lines, encoding
+
+
+def check_line_lengths(lines: list[str], where: str) -> None:
+    """Refuse the first line longer than :data:`MAX_LINE_CHARS`, naming it."""
+    long = next((no for no, line in enumerate(lines, start=1) if len(line) > MAX_LINE_CHARS), None)
+    if long is not None:
+        raise DataError(f"line of {len(lines[long - 1]):,} characters, longer than the {MAX_LINE_CHARS:,} a curve "
+                        "file's line may hold (no number, column name or unit is that long): is this the "
+                        "curve file? A cell holding a long note must be removed or shortened", path=where,
+                        line=long)
+
+
+def read_lines(path: str | Path, where: str) -> tuple[bytes, list[str], str]:
+    """The file's bytes, its lines (line n is ``lines[n - 1]``) and the encoding used."""
+    raw = read_bytes(path, where)
+    lines, encoding = decode(raw, where)
     return raw, lines, encoding
 
 
@@ -110,10 +172,10 @@ def _numeric(cells: list[str], decimal: str) -> bool:
     return numbers >= 2 and 2 * numbers > len(filled)
 
 
-def _sniff(lines: list[str]) -> tuple[str, str, int]:
+def _sniff(lines: list[str], separators: tuple[str, ...] = _SEPARATORS) -> tuple[str, str, int]:
     """Separator, decimal mark and row width that make the most lines numeric (all cells first)."""
     best: tuple = ()
-    for order, sep in enumerate(_SEPARATORS):
+    for order, sep in enumerate(separators):
         cells = [split_line(line, sep) if _skip(line) is None else [] for line in lines]
         for decimal in (".", ","):
             if sep == "," and decimal == ",":
@@ -127,7 +189,7 @@ def _sniff(lines: list[str]) -> tuple[str, str, int]:
             if not best or key > best[0]:
                 best = (key, sep, decimal, width)
     if not best:
-        return ",", ".", 0
+        return separators[0], ".", 0
     return best[1], best[2], best[3]
 
 
@@ -137,9 +199,12 @@ def is_lvm(lines: list[str]) -> bool:
     return first.strip().lower().startswith("labview measurement")
 
 
-def text_layout(lines: list[str], where: str) -> Layout:
-    """Find the layout of a delimited-text curve file's lines (module docstring)."""
-    sep, decimal, width = _sniff(lines[:_SNIFF_LINES])
+def text_layout(lines: list[str], where: str, *, separators: tuple[str, ...] = _SEPARATORS) -> Layout:
+    """Find the layout of a delimited-text curve file's lines (module docstring).
+
+    ``separators`` limits the separators tried (a spreadsheet's rows rendered as text use tab only).
+    """
+    sep, decimal, width = _sniff(lines[:_SNIFF_LINES], separators)
     header_no, units_no = _find_header(lines, sep, decimal, width, where)
     layout = Layout(sep=sep, decimal=decimal, header_no=header_no, units_no=units_no)
     _classify(lines, layout, "metadata above the header")
@@ -189,14 +254,7 @@ def _is_units_row(row: list[str], header: list[str], width: int) -> bool:
 
 def _is_unit(cell: str) -> bool:
     """Whether pint reads a cell as a unit (``mm``, ``kN``, ``sec``), never a plain number."""
-    from ..units import ureg  # noqa: PLC0415
-    if is_number(cell, ".") or is_number(cell, ","):
-        return False
-    try:
-        ureg.parse_units(cell)
-    except Exception:  # noqa: BLE001 - pint raises many unrelated types for non-units
-        return False
-    return True
+    return not (is_number(cell, ".") or is_number(cell, ",")) and is_unit(cell)
 
 
 def _classify(lines: list[str], layout: Layout, above_reason: str) -> None:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .plots import STAGE_COLORS, _pyplot, file_figure, save
+from .plots import STAGE_COLORS, pyplot, file_figure, save
 from .view import curve_label, estimate_text
 
 __all__ = ["plot_fit", "fit_view", "draw_fit", "series_data", "plot_series"]
@@ -147,7 +147,7 @@ def draw_fit(view: dict, *, ax=None, path: str | Path | None = None, residuals: 
     kx, xlabel = _axis(view["control"])
     rax = None
     if ax is None:
-        subplots = file_figure if path is not None else _pyplot().subplots
+        subplots = file_figure if path is not None else pyplot().subplots
         if residuals:
             fig, (ax, rax) = subplots(2, 1, figsize=(7.0, 6.2), sharex=True, layout="constrained",
                                       gridspec_kw={"height_ratios": (3, 1)})
@@ -216,7 +216,7 @@ def plot_series(result, *, ax=None, path: str | Path | None = None, residuals: b
     radius = residuals and any("a" in d for d in data)
     if ax is None:
         n = 1 + residuals + radius
-        subplots = file_figure if path is not None else _pyplot().subplots
+        subplots = file_figure if path is not None else pyplot().subplots
         _, axes = subplots(n, 1, figsize=(7.0, 3.0 * n), layout="constrained", sharex=True, squeeze=False,
                            gridspec_kw={"height_ratios": [3, 1.4, 2][:n]})
         axes = list(axes[:, 0])

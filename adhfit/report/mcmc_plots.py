@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import _pyplot, save
+from .plots import pyplot, save
 from .view import display
 
 __all__ = ["plot_corner", "plot_predictive"]
@@ -40,7 +40,7 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
     A series shows its shared W_ad and μh only (its per-curve offsets are in the report's Curves table;
     a panel per offset pair would grow with the square of the number of curves).
     """
-    _pyplot()
+    pyplot()
     import corner  # noqa: PLC0415
     slip = slip or result.slip["parameters_from"]
     every = list(result.mcmc["slips"][slip]["parameters"])
@@ -75,7 +75,7 @@ def plot_predictive(result, *, ax=None, path: str | Path | None = None):
     -------
     matplotlib.axes.Axes
     """
-    plt = _pyplot()
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
     c, seg, band = result.curve, result.segments, result.predictive

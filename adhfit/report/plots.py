@@ -7,12 +7,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_history", "STAGE_COLORS", "file_figure", "save"]
+__all__ = ["plot_history", "STAGE_COLORS", "file_figure", "pyplot", "save"]
 
 STAGE_COLORS = {"making_contact": "#1f77b4", "pinning": "#2ca02c", "delamination": "#d62728"}
 
 
-def _pyplot():
+def pyplot():
+    """``matplotlib.pyplot``, with the Agg backend unless a notebook chose one (plots shown in a notebook)."""
     import matplotlib  # noqa: PLC0415
     if matplotlib.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
         try:
@@ -82,7 +83,7 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     -------
     matplotlib.axes.Axes
     """
-    plt = _pyplot()
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(6.0, 4.2), layout="constrained")
     fr = result.frame
