@@ -150,6 +150,7 @@ def test_cli_global_mcmc_reduced_run(tmp_path, monkeypatch):
         off = c["offsets"]["displacement"]
         assert off["ci95"][0] < off["value"] < off["ci95"][1] and off["method"].startswith("posterior")
     assert (out / "chain.h5").is_file() and (out / "report.html").is_file() and (out / "report.md").is_file()
+    assert (out / "corner.png").stat().st_size > 0  # the shared W_ad and μh's posterior, as for one curve
     page = (out / "report.html").read_text(encoding="utf-8")
     assert "Bayesian fit (MCMC)" in page and "Convergence diagnostics" in page
 

@@ -219,9 +219,10 @@ def test_outputs_and_human_report(small_fit):
     from adhfit.report.mcmc_plots import plot_corner, plot_predictive
     res, _, out = small_fit
     text = render_markdown(res)
-    assert "## MCMC diagnostics" in text and "R-hat" in text and "N/τ" in text
-    # tiny chains: the report must say plainly that the run has not converged
-    assert not res.converged and "HAS NOT CONVERGED" in text
+    assert "### Convergence diagnostics" in text and "R-hat" in text and "N/τ" in text
+    # tiny chains: the report must say plainly that the run has not converged, before anything else
+    assert not res.converged and "NOT CONVERGED" in text
+    assert text.index("NOT CONVERGED") < text.index("## Warnings")
     assert any("NOT CONVERGED" in w for w in res.warnings)
     plot_corner(res, path=out / "corner.png")
     plot_predictive(res, path=out / "fit_mcmc.png")

@@ -12,7 +12,7 @@ import pytest
 
 from adhfit.report.html import fit_summary_html, render_html
 from adhfit.report.summary_html import render_summary_html
-from adhfit.report.text import estimate_text
+from adhfit.report.view import estimate_text
 
 
 class _Text(HTMLParser):
@@ -136,16 +136,16 @@ def test_mcmc_page_shows_diagnostics_priors_and_evidence_as_tables():
     text, _ = _visible(page)
     _no_raw_json(text)
     flat = page.replace("\n", "")
-    for heading in ("Priors", "Slip condition: evidence", "Convergence diagnostics</h3><h3>no-slip: converged"):
-        assert f"<h3>{heading}</h3><table" in flat, heading
+    for heading in ("Priors", "Slip condition: evidence", "Convergence diagnostics</h3><h4>no-slip: converged"):
+        assert f"<h3>{heading}</h" in flat and "<table" in flat.split(f"<h3>{heading}</h")[1][:30], heading
     assert "R-hat" in text and "1.0003" in text and "1915.62" in text and "loguniform on [0.004, 40]" in text
     assert "seed 5" in text and "11440" in text
-    assert "has not converged" not in text
+    assert "NOT CONVERGED" not in text
     d = _mcmc_report()
     d["converged"] = False
     d["mcmc"]["converged"] = False
     page = render_html(d)
-    assert page.index("has not converged") < page.index("<h2>Warnings</h2>")  # said first, not buried
+    assert page.index("NOT CONVERGED") < page.index("<h2>Warnings</h2>")  # said first, not buried
 
 
 def test_notebook_view_is_a_table():

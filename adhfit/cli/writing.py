@@ -34,7 +34,7 @@ def check_output_dir(path: Path) -> Path:
 def estimate_line(name: str, e) -> str:
     """One line per estimate, honest about one-sided and undetermined parameters."""
     d = e if isinstance(e, dict) else e.as_dict()
-    from ..report.text import estimate_text  # noqa: PLC0415
+    from ..report.view import estimate_text  # noqa: PLC0415
     return f"{name} = {estimate_text(name, d)}"
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from .files import write_text
+
 __all__ = ["report_dict", "write_json"]
 
 
@@ -37,8 +39,10 @@ def report_dict(result, extra: dict | None = None) -> dict:
 
 
 def write_json(result, path: str | Path, *, extra: dict | None = None) -> Path:
-    """Write report.json; ``allow_nan=False`` guarantees strict JSON."""
-    path = Path(path)
-    path.write_text(json.dumps(report_dict(result, extra), indent=2, allow_nan=False, ensure_ascii=False) + "\n",
-                    encoding="utf-8")
-    return path
+    """Write report.json atomically; ``allow_nan=False`` guarantees strict JSON."""
+    return write_text(path, dumps(report_dict(result, extra)))
+
+
+def dumps(d: dict) -> str:
+    """The text of report.json: strict JSON (no NaN), indented, UTF-8 characters kept."""
+    return json.dumps(d, indent=2, allow_nan=False, ensure_ascii=False) + "\n"

@@ -7,14 +7,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import _pyplot
+from .plots import pyplot, save
+from .view import display
 
 __all__ = ["plot_corner", "plot_predictive"]
 
-#: SI -> display factor and label per parameter
-_DISPLAY = {"work_of_adhesion": (1.0, "W_ad (J/m²)"), "mu_h": (1.0, "μh (N/m)"),
-            "displacement_offset": (1e6, "δ₀ (µm)"), "pressure_offset": (1.0, "P₀ (Pa)"),
-            "force_offset": (1e3, "F₀ (mN)")}
+
+def _label(name: str) -> tuple[float, str]:
+    """SI -> display factor and axis label of a sampled parameter (symbols and units of the view layer)."""
+    sym, _, k, unit = display(name)
+    return k, f"{sym} ({unit})" if unit else sym
 
 
 def plot_corner(result, slip: str | None = None, *, path: str | Path | None = None):
@@ -32,15 +34,22 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
     Returns
     -------
     matplotlib.figure.Figure
+
+    Notes
+    -----
+    A series shows its shared W_ad and μh only (its per-curve offsets are in the report's Curves table;
+    a panel per offset pair would grow with the square of the number of curves).
     """
-    _pyplot()
+    pyplot()
     import corner  # noqa: PLC0415
     slip = slip or result.slip["parameters_from"]
-    names = result.mcmc["slips"][slip]["parameters"]
-    k = np.array([_DISPLAY.get(n, (1.0, n))[0] for n in names])
-    samples = np.asarray(result.samples[slip]) * k
-    truths = [result.mcmc["lsq_estimates"][slip][n] * f for n, f in zip(names, k)]
-    fig = corner.corner(samples, labels=[_DISPLAY.get(n, (1.0, n))[1] for n in names], truths=truths,
+    every = list(result.mcmc["slips"][slip]["parameters"])
+    names = [n for n in every if not result.curves or n in ("work_of_adhesion", "mu_h")]
+    k = np.array([_label(n)[0] for n in names])
+    samples = np.asarray(result.samples[slip])[:, [every.index(n) for n in names]] * k
+    lsq = (result.mcmc.get("lsq_estimates") or {}).get(slip) or {}
+    truths = [None if lsq.get(n) is None else lsq[n] * f for n, f in zip(names, k)]
+    fig = corner.corner(samples, labels=[_label(n)[1] for n in names], truths=truths,
                         truth_color="#d62728", quantiles=[0.025, 0.5, 0.975], show_titles=True,
                         title_fmt=".4g", title_kwargs={"fontsize": 8}, label_kwargs={"fontsize": 9})
     fig.suptitle(f"posterior, {slip} ({len(samples)} samples; red: least squares)"
@@ -48,7 +57,7 @@ def plot_corner(result, slip: str | None = None, *, path: str | Path | None = No
                     else " — NOT CONVERGED"), fontsize=9, y=0.995)
     fig.subplots_adjust(top=0.9)  # room for the suptitle above the first panel's own title
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save(fig, path, dpi=110)
     return fig
 
 
@@ -66,7 +75,7 @@ def plot_predictive(result, *, ax=None, path: str | Path | None = None):
     -------
     matplotlib.axes.Axes
     """
-    plt = _pyplot()
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
     c, seg, band = result.curve, result.segments, result.predictive
@@ -96,5 +105,5 @@ def plot_predictive(result, *, ax=None, path: str | Path | None = None):
     ax.set_title(f"{result.slip['verdict']}; {band['draws']} posterior draws{conv}", fontsize=10)
     ax.legend(fontsize=7)
     if path is not None:
-        ax.figure.savefig(path, dpi=130)
+        save(ax.figure, path)
     return ax

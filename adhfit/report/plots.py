@@ -7,12 +7,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_history", "STAGE_COLORS", "file_figure"]
+__all__ = ["plot_history", "STAGE_COLORS", "file_figure", "pyplot", "save"]
 
 STAGE_COLORS = {"making_contact": "#1f77b4", "pinning": "#2ca02c", "delamination": "#d62728"}
 
 
-def _pyplot():
+def pyplot():
+    """``matplotlib.pyplot``, with the Agg backend unless a notebook chose one (plots shown in a notebook)."""
     import matplotlib  # noqa: PLC0415
     if matplotlib.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
         try:
@@ -36,6 +37,16 @@ def file_figure(nrows: int = 1, ncols: int = 1, **subplots_kw: Any):
     from matplotlib.figure import Figure  # noqa: PLC0415
     fig = Figure(figsize=subplots_kw.pop("figsize", None), layout=subplots_kw.pop("layout", "constrained"))
     return fig, fig.subplots(nrows, ncols, **subplots_kw)
+
+
+def save(fig: Any, path: Any, dpi: int = 130) -> None:
+    """Save ``fig`` as PNG to ``path``: a file name atomically (:func:`.files.save_figure`), a binary stream
+    (``io.BytesIO``) as it is."""
+    if isinstance(path, (str, Path)):
+        from .files import save_figure  # noqa: PLC0415
+        save_figure(fig, path, dpi=dpi)
+    else:
+        fig.savefig(path, format="png", dpi=dpi)
 
 
 def _scales_of(scene: Any):
@@ -72,7 +83,7 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     -------
     matplotlib.axes.Axes
     """
-    plt = _pyplot()
+    plt = pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(6.0, 4.2), layout="constrained")
     fr = result.frame
@@ -106,5 +117,5 @@ def plot_history(result: Any, *, scene: Any = None, ax=None, path: str | Path | 
     ax.set_title(f"{control} control, {result.inputs.get('slip')}" + ("" if tp else ""), fontsize=10)
     ax.legend(fontsize=8)
     if path is not None:
-        ax.figure.savefig(path, dpi=130)
+        save(ax.figure, path)
     return ax

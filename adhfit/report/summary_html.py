@@ -15,10 +15,11 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from .files import relative_link, write_text
 from .html_parts import e, figure, num, page, table
 from .plots import file_figure
-from .text import display, estimate_text, interval_text, status_text
 from .thumbnails import thumbnail_png
+from .view import display, estimate_text, interval_text, status_text
 
 __all__ = ["write_summary_html", "render_summary_html", "write_plot_data"]
 
@@ -41,9 +42,7 @@ def write_plot_data(result: Any, path: str | Path) -> Path | None:
     except (AttributeError, KeyError, TypeError):
         return None
     d = json.loads(json.dumps(d).replace("NaN", "null"))
-    path = Path(path)
-    path.write_text(json.dumps(d), encoding="utf-8")
-    return path
+    return write_text(path, json.dumps(d))
 
 
 def _load(row: Mapping[str, Any], name: str) -> dict | None:
@@ -126,8 +125,8 @@ def _multiples(rows: Sequence[Mapping[str, Any]], labels: list[str], reports: li
 
 def _row_html(i: int, row: Mapping[str, Any], rep: dict | None, label: str, outdir: Path) -> list[str]:
     link = e(label)
-    if row.get("report_dir"):
-        href = os.path.relpath(Path(str(row["report_dir"])) / "report.html", outdir).replace(os.sep, "/")
+    if row.get("report_dir"):  # relative and URL-encoded: a file name never becomes a scheme or markup
+        href = relative_link(Path(str(row["report_dir"])) / "report.html", outdir)
         link = f"<a href=\"{e(href)}\">{e(label)}</a>"
     if row.get("status") != "ok" or rep is None:
         return [str(i), f"{link}<br><span class=\"status-failed\">failed:</span> <span class=\"muted\">"
@@ -179,7 +178,5 @@ def render_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -
 
 
 def write_summary_html(rows: Sequence[Mapping[str, Any]], outdir: str | Path) -> Path:
-    """Write ``outdir/summary.html`` (see :func:`render_summary_html`); returns its path."""
-    path = Path(outdir) / "summary.html"
-    path.write_text(render_summary_html(rows, outdir), encoding="utf-8")
-    return path
+    """Write ``outdir/summary.html`` atomically (see :func:`render_summary_html`); returns its path."""
+    return write_text(Path(outdir) / "summary.html", render_summary_html(rows, outdir))

@@ -15,6 +15,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .files import write_bytes
 from .plots import file_figure
 
 __all__ = ["THUMBNAIL", "draw_thumbnail", "write_thumbnail", "thumbnail_png"]
@@ -62,7 +63,7 @@ def draw_thumbnail(plot: Mapping[str, Any], path: str | Path | None = None) -> b
     fig.savefig(buf, format="png", dpi=_DPI)
     png = buf.getvalue()
     if path is not None:
-        Path(path).write_bytes(png)
+        write_bytes(path, png)
     return png
 
 
