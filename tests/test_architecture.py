@@ -28,10 +28,6 @@ LAYERS = [("adhfit.cli", 7), ("adhfit.report", 6), ("adhfit.fitting", 5),
 #: Every entry must exist (a stale entry fails) and must stay inside a function.
 LAZY_HOOKS = {("adhfit.fitting.result", "adhfit.report.fit_plot"),
               ("adhfit.fitting.result", "adhfit.report.html"),
-              # TEMPORARY, for the lead's merge: FitResult.plot's series branch still imports the deleted
-              # report.series_plot (resolved to the package); plot_fit draws a series now, so the branch goes,
-              # and with it this entry (the stale-entry check below fails until it is removed).
-              ("adhfit.fitting.result", "adhfit.report"),
               ("adhfit.physical", "adhfit.report.plots")}
 
 

@@ -73,6 +73,8 @@ def test_a_sequence_of_curves_is_one_global_fit(curve):
     r = adhfit.fit([curve, c2], [_scene(), _scene(pressure="1.6 kPa")], profile=False)
     assert type(r) is FitResult and len(r.curves) == 2
     assert r.parameters["work_of_adhesion"].value == pytest.approx(0.4, rel=0.05)
+    ax = r.plot()  # a series draws itself like one curve (every curve, the shared fit)
+    assert ax.get_figure() is not None and len(ax.lines) >= 2
 
 
 def test_cli_mcmc_goes_through_the_same_path(tmp_path, capsys):

@@ -359,13 +359,11 @@ class FitResult:
                 "mcmc": dict(m)}
 
     def plot(self, ax=None, **kwargs):
-        """Data, both fitted curves and residuals (see :func:`adhfit.report.fit_plot.plot_fit`).
+        """Data, the fitted curves and residuals, for one curve or every curve of a series (see
+        :func:`adhfit.report.fit_plot.plot_fit`).
 
-        Returns the main axes.  Draws from stored predictions: never re-runs a fit.
+        Returns the main (force) axes.  Draws from stored predictions: never re-runs a fit.
         """
-        if self.curves:  # a global fit: every curve, the shared fit, residuals (returns the figure)
-            from ..report.series_plot import plot_series  # noqa: PLC0415
-            return plot_series(self, **kwargs)
         from ..report.fit_plot import plot_fit  # noqa: PLC0415 - matplotlib lives in adhfit.report
         return plot_fit(self, ax=ax, **kwargs)
 
