@@ -89,7 +89,9 @@ def _independent_blocks(members, theta):
         x_off, f_off = theta[2 + 2 * i] * m.par.x_scale, theta[3 + 2 * i] * m.par.f_scale
         rf = m.model.force - m.model.predict(w, mu, x_off, f_off)
         x_tp = m.model.turning_point(w, mu, x_off)[0]
-        jump = (m.model.jump[0] - x_tp) / m.model.jump[1] * m.sigma_f  # one observation, in force units
+        lo, hi = sorted(m.model.jump[:2])
+        p_in = stats.norm.cdf((hi - x_tp) / m.model.jump[2]) - stats.norm.cdf((lo - x_tp) / m.model.jump[2])
+        jump = math.sqrt(-2.0 * math.log(p_in)) * m.sigma_f  # the censored pull-off term, in force units
         out.append((np.append(rf, jump), m.sigma_f))
         a = radius_prediction(m.model, w, mu, x_off)
         b = m.blocks[0]

@@ -264,12 +264,13 @@ def lag1_autocorrelation(r: np.ndarray) -> float:
     return float(d[1:] @ d[:-1]) / den if den > 0 else 0.0
 
 
-def correlation_factor(r: np.ndarray) -> tuple[float, float]:
+def correlation_factor(r: np.ndarray, floor: float = 0.0) -> tuple[float, float]:
     """(ρ, factor): the lag-1 autocorrelation and the interval widening sqrt((1 + ρ)/(1 - ρ));
-    factor is 1 unless ρ exceeds max(:data:`RHO_MIN`, 3/√n)."""
+    factor is 1 unless ρ exceeds max(:data:`RHO_MIN`, 3/√n), and when the residuals' RMS is below
+    ``floor`` (the model's own precision: noise-free data, whose smooth interpolation error is not noise)."""
     rho = lag1_autocorrelation(r)
     n = max(int(np.size(r)), 1)
-    if rho <= max(RHO_MIN, 3.0 / math.sqrt(n)):
+    if rho <= max(RHO_MIN, 3.0 / math.sqrt(n)) or float(np.sqrt(np.mean(np.square(r)))) < floor:
         return rho, 1.0
     rc = min(rho, RHO_CAP)
     return rho, math.sqrt((1.0 + rc) / (1.0 - rc))

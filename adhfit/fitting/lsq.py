@@ -30,12 +30,13 @@ from dataclasses import dataclass
 
 import lmfit
 import numpy as np
+from scipy import special
 
 from ..params import FITTED
 from .model import OFFSET_NAME, CurveModel, ModelDomainError
 from .starts import Start, data_start, noise_estimate
 
-__all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise"]
+__all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise", "pull_off_term"]
 
 #: relative finite-difference step of the Jacobian (the history's solver noise is ~1e-12)
 DIFF_STEP = 1e-6
@@ -120,14 +121,38 @@ class Parametrisation:
         return np.array(d)
 
 
+def pull_off_term(gap: tuple[float, float, float], x_tp: float) -> float:
+    """sqrt(-2 ln P): P the probability that the model's turning point ``x_tp`` lies in the pull-off gap.
+
+    The data place the pull-off anywhere between the last attached row and the first detached row
+    (``gap`` = (x_attached, x_detached, soft), :attr:`~.model.CurveModel.jump`), so the likelihood of the
+    jump is censored, not Gaussian: P = Φ((hi - x_tp)/s) - Φ((lo - x_tp)/s), flat (P ≈ 1, a zero
+    residual) inside the gap and a wall outside (the residual grows as the distance in units of s).
+    A Gaussian term about the gap's midpoint (σ = spacing/√12) pulled the turning point to the middle
+    of the row gap, so W_ad and the slip ΔBIC moved with where the rows happened to fall.
+    """
+    lo, hi = sorted(gap[:2])
+    s = gap[2]
+    a, b = (lo - x_tp) / s, (hi - x_tp) / s
+    if b <= 0.0:  # x_tp above the gap
+        lb, la = special.log_ndtr(b), special.log_ndtr(a)
+        log_p = lb + math.log1p(-math.exp(min(la - lb, 0.0))) if la < lb else -np.inf
+    elif a >= 0.0:  # below it
+        la, lb = special.log_ndtr(-a), special.log_ndtr(-b)
+        log_p = la + math.log1p(-math.exp(min(lb - la, 0.0))) if lb < la else -np.inf
+    else:
+        log_p = math.log1p(-(special.ndtr(a) + special.ndtr(-b)))
+    return math.sqrt(max(-2.0 * log_p, 0.0)) if math.isfinite(log_p) else math.sqrt(PENALTY)
+
+
 def residual_function(model: CurveModel, par: Parametrisation, scale: float, sigma: float | None = None):
     """The residual vector for lmfit (params -> array).
 
     (F_measured - F_model)/scale at every row.  With a free split the model itself decides which
     unloading rows are detached (:meth:`CurveModel.attached_weight`).  With a fixed split that shows
-    the pull-off, one more term (x_jump - x_tp)/σ_jump · σ/scale: the measured pull-off position
-    against the model's turning point, with σ_jump = spacing/√12 (:attr:`CurveModel.jump`) and σ the
-    force noise (given, or the robust estimate), so that the term has the weight of one observation.
+    the pull-off, one more term: :func:`pull_off_term` (the turning point must lie in the gap between
+    the last attached and the first detached row) in units of the force noise σ (given, or the robust
+    estimate), so that ``σ/scale`` of it enters a residual in units of ``scale``.
     """
     force = model.force
     jump = model.jump
@@ -146,7 +171,7 @@ def residual_function(model: CurveModel, par: Parametrisation, scale: float, sig
             x_tp = model.turning_point(w, mu, off)[0]
         except ModelDomainError:
             return np.full(n, PENALTY)
-        return np.append(r, (jump[0] - x_tp) / jump[1] * sigma / scale)
+        return np.append(r, pull_off_term(jump, x_tp) * sigma / scale)
     return residual
 
 

@@ -15,8 +15,9 @@ A measured curve is a history: loading (the control variable rises to its larges
   curves, which biased W_ad by -30 % (docs/numerics.md B4).
 * With a **fixed split** (``fixed_split=True``: the rows of ``segments``) the rows before the jump are
   attached; one beyond the model's turning point is given the turning-point force (a clamp that keeps
-  the residual continuous), and the measured pull-off position enters as one more residual
-  (:attr:`CurveModel.jump`, σ = spacing/√12: the jump happened somewhere between two rows).  The fit
+  the residual continuous), and the measured pull-off enters as one more residual: the probability
+  that the model's turning point lies in the gap between the last attached and the first detached
+  row (:attr:`CurveModel.jump`, a censored term, flat inside the gap).  The fit
   uses it as a second stage, at the row the free split found (:mod:`.lsq`): the free split's ramp
   would place pull-off to a fraction of a row when the jump is large against the noise.
 
@@ -57,6 +58,8 @@ OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offs
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
 #: succeed at a neighbouring one; the interpolants differ by ~1e-4 of the force, far below the noise)
 RETRY_POINTS = (0, 7, 19)
+#: the pull-off gap's soft edge is its width over this (:attr:`CurveModel.jump`)
+JUMP_SOFT = 8.0
 class ModelDomainError(AdhfitError, ValueError):
     """The parameters leave the model's domain (the history cannot be computed)."""
 
@@ -360,19 +363,20 @@ class CurveModel:
         return int(self.segments.i_turn + 1 + det[0]) if det.size else None
 
     @property
-    def jump(self) -> tuple[float, float] | None:
-        """The measured pull-off position and its uncertainty, (x_jump, σ_jump), in measured units
-        (fixed split only: with a free split the rows themselves carry it).
+    def jump(self) -> tuple[float, float, float] | None:
+        """Where the data place the pull-off, in measured units (fixed split only: with a free split the
+        rows themselves carry it): ``(x_attached, x_detached, soft)``.
 
-        The jump happened between the last attached row and the first detached row: x_jump is their
-        midpoint and σ_jump = |spacing|/sqrt(12), the standard deviation of a position known only to
-        lie in that interval.  ``None`` when the data end before pull-off.
+        The jump happened between the last attached row and the first detached row, anywhere in that
+        gap: the model's turning point must lie in it, and the likelihood is the probability that it
+        does (:func:`.lsq.pull_off_term`: flat inside, a wall outside), with an edge ``soft`` (1/8 of the
+        gap) for the rows' own imprecision.  ``None`` when the data end before pull-off.
         """
         j = self.segments.i_jump
         if j is None or not self.fixed_split:
             return None
-        x_a, x_d = self.x[j - 1], self.x[j]
-        return float(0.5 * (x_a + x_d)), max(abs(float(x_a - x_d)), 1e-12 * self.x_max) / math.sqrt(12.0)
+        x_a, x_d = float(self.x[j - 1]), float(self.x[j])
+        return x_a, x_d, max(abs(x_a - x_d), 1e-12 * abs(self.x_max)) / JUMP_SOFT
 
     def turning_point(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> tuple[float, float]:
         """The model's turning point (pull-off) in measured units: (control value, force in N)."""

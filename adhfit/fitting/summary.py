@@ -24,6 +24,9 @@ __all__ = ["summarize", "DISAGREE", "model_curve", "status_warnings"]
 #: profile and covariance half-widths differing by more than this fraction earn a note
 DISAGREE = 0.25
 _PLAIN = {"work_of_adhesion": "W_ad", "mu_h": "μh"}
+#: RMS residual, as a fraction of the largest force, below which the residuals are the model's own
+#: numerical error (3x its interpolation error at the default points), not noise
+NUMERICAL = 3e-4
 
 
 def model_curve(model, si: dict) -> dict:
@@ -184,7 +187,10 @@ def summarize(fit, *, profile: bool = True) -> SlipFit:
     for row, k in zip(rows, range(len(rows))):
         pred = fit.predicted(k)
         row["predicted"], row["force_residual"] = pred, fit.members[k].model.force - pred
-    corr_rho = [correlation_factor(r["force_residual"]) for r in rows]
+    # residuals below 3x the model's interpolation error (~1e-4 of the largest force at the default
+    # points) are numerical, not noise: their smoothness is no correlated noise
+    corr_rho = [correlation_factor(r["force_residual"], NUMERICAL * float(np.max(np.abs(m.model.force))))
+                for r, m in zip(rows, fit.members)]
     rho = max(c[0] for c in corr_rho)
     factor = max(c[1] for c in corr_rho)
     est = {k: widen(e, factor) for k, e in est.items()}
