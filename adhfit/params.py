@@ -120,7 +120,10 @@ FITTED: dict[str, Param] = {
     "pressure_offset": _p("pressure_offset", "P_0", "Pa", 0.0, -math.inf, math.inf,
                           "added to the measured pressure (transducer zero); off by default"),
     "force_offset": _p("force_offset", "F_0", "N", 0.0, -math.inf, math.inf,
-                       "added to the model force (load-cell zero); off by default"),
+                       "added to the model force (load-cell zero at the first row); fitted by default"),
+    "force_drift": _p("force_drift", "F_d", "N", 0.0, -math.inf, math.inf,
+                      "linear drift of the load-cell zero from the first row to the last, added to the model "
+                      "force; fitted where rows before contact and after pull-off pin it"),
 }
 
 

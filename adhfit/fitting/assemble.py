@@ -123,7 +123,8 @@ def options_dict(problem, opts, stage) -> dict:
     first = stage.singles[next(iter(stage.singles))][0]
     return {"slip": problem.slip, "sigma": opts.sigma, "sigma_contact_radius": opts.sigma_contact_radius,
             "contact_radius": opts.contact_radius, "fit_x_offset": first.par.fit_x_offset,
-            "fit_force_offset": opts.fit_force_offset, "points": opts.points, "profile": opts.profile,
+            "fit_force_offset": opts.fit_force_offset, "fit_force_drift": first.par.fit_force_drift,
+            "points": opts.points, "profile": opts.profile,
             "membrane": problem.membrane}
 
 

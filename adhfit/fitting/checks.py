@@ -59,9 +59,9 @@ def curve_rows(fit) -> list[dict]:
         sigma = m.sigma_f if fit.joint else fit.sigma
         ref = sigma if fit.given[PRIMARY] else (noise_estimate(m.model.force) or sigma)
         nu_k = 2.0 / len(fit.members) + len(m.par.names) - 2
-        chi_f = float(full @ full) / ref ** 2
-        row = {"force_residual": res_f, "predicted": m.model.force - res_f, "chisqr": chi_f,
-               "n_residuals": m.size, "redchi": chi_f / max(m.n_force - nu_k, 1.0), "sigma_force": sigma,
+        chi_f = float(res_f @ res_f) / ref ** 2  # the rows: what a curve's reduced χ² flags
+        row = {"force_residual": res_f, "predicted": m.model.force - res_f, "chisqr": float(full @ full) / ref ** 2,
+               "n_residuals": m.size, "redchi": chi_f / max(m.model.force.size - nu_k, 1.0), "sigma_force": sigma,
                "noise_reference": ref, "blocks": {}}
         for b, rb in zip(m.blocks, sec):
             res_b = rb * b.sigma
@@ -151,12 +151,13 @@ def leave_one_out(fit, rows: list[dict]) -> list[dict]:
 def _offsets(fit, k: int) -> dict:
     m = fit.members[k]
     out = {}
-    for base in ("x_offset", "force_offset"):
+    for base in ("x_offset", "force_offset", "force_drift"):
         p = fit.best.params.get(fit.spar.name(base, k))
         if p is None:
             continue
         scale = m.par.x_scale if base == "x_offset" else m.par.f_scale
-        short = OFFSET_NAME[m.model.control].removesuffix("_offset") if base == "x_offset" else "force"
+        short = {"x_offset": OFFSET_NAME[m.model.control].removesuffix("_offset"), "force_offset": "force",
+                 "force_drift": "force_drift"}[base]
         se = p.stderr * scale if p.stderr is not None and np.isfinite(p.stderr) else None
         out[short] = {"value": p.value * scale, "stderr": se, "unit": "m" if short == "displacement" else
                       ("Pa" if short == "pressure" else "N")}
@@ -197,7 +198,9 @@ def _pull_flags(entries: list[dict]) -> None:
     p = [e["leave_one_out"]["p_value"] for e in entries if e["leave_one_out"]]
     if len(p) < 2 or min(p) >= PULL_P:
         return
-    worst = [int(np.argmin(p))] if len(entries) > 2 else list(range(len(entries)))
+    # ranked by the statistic, not the p-value: two discordant curves can both have p = 0.0 in floating point
+    stat = [e["leave_one_out"]["chi2"] for e in entries]
+    worst = [int(np.argmax(stat))] if len(entries) > 2 else list(range(len(entries)))
     for k in worst:
         entries[k]["flags"].append("pull")
 

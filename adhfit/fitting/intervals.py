@@ -32,7 +32,7 @@ __all__ = ["INTERNAL", "Z95", "MAX_LOG_SE", "MAX_ROUNDS", "estimates", "secant_c
 
 #: SI name -> internal lmfit name
 INTERNAL = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h", "displacement_offset": "x_offset",
-            "pressure_offset": "x_offset", "force_offset": "force_offset"}
+            "pressure_offset": "x_offset", "force_offset": "force_offset", "force_drift": "force_drift"}
 Z95 = float(stats.norm.ppf(0.975))
 #: standard error of ln W_ad or ln μh above which the covariance says nothing (a factor e^1.5·1.96 ≈ 20)
 MAX_LOG_SE = 1.5
@@ -232,7 +232,7 @@ def estimates(fit, profile_limits: dict) -> dict[str, Estimate]:
         p = best.params[INTERNAL[name]]
         log = name in _SHARED
         value = si[name] if name in si else si["x_offset"]  # displacement_offset, pressure_offset
-        factor = value if log else (par.x_scale if name != "force_offset" else par.f_scale)
+        factor = value if log else (par.f_scale if name.startswith("force_") else par.x_scale)
         se_int = p.stderr if (p.stderr is not None and np.isfinite(p.stderr) and p.stderr > 0) else None
         back = (lambda t: math.exp(min(t, 700.0))) if log else (lambda t, f=factor: t * f)
         if log and se_int is not None and se_int > MAX_LOG_SE:  # a factor > 20 either way: not a number

@@ -146,7 +146,7 @@ def objective_fit(slip: str, singles: list[RawFit], curves: list, segs: list, si
     offsets = []
     for r in singles:
         si = r.par.si(r.best.params)
-        offsets.append({"x_offset": si["x_offset"], "force_offset": si["force_offset"]})
+        offsets.append({k: si[k] for k in ("x_offset", "force_offset", "force_drift")})
     starts = [_mean_start(singles)] + [{k: r.par.si(r.best.params)[k] for k in _LN} for r in singles]
     # an exact history costs ~10x a large-stretch one: its members start at their own exact optima, and
     # 1e-5 of χ² is far below what the intervals and the slip comparison need (see .membrane EXACT_TOL)

@@ -34,7 +34,7 @@ from scipy import special
 
 from ..params import FITTED
 from .model import OFFSET_NAME, CurveModel, ModelDomainError
-from .starts import Start, data_start, noise_estimate
+from .starts import Start, data_start, hinge_contact, noise_estimate
 
 __all__ = ["Parametrisation", "RawFit", "fit_slip", "residual_function", "minimise", "pull_off_term"]
 
@@ -61,6 +61,9 @@ class Parametrisation:
         Largest measured force, N; the force offset is fitted over it.
     control : str
     fit_x_offset, fit_force_offset : bool
+    fit_force_drift : bool
+        Fit a linear drift of the load-cell zero over the rows (the force offset is then the zero at
+        the first row), over the largest force.
     """
 
     x_scale: float
@@ -68,6 +71,7 @@ class Parametrisation:
     control: str
     fit_x_offset: bool
     fit_force_offset: bool
+    fit_force_drift: bool = False
 
     @property
     def names(self) -> list[str]:
@@ -77,6 +81,8 @@ class Parametrisation:
             out.append(OFFSET_NAME[self.control])
         if self.fit_force_offset:
             out.append("force_offset")
+        if self.fit_force_drift:
+            out.append("force_drift")
         return out
 
     def params(self, start: Start) -> lmfit.Parameters:
@@ -101,15 +107,18 @@ class Parametrisation:
             row = FITTED["force_offset"]
             p.add("force_offset", value=start["force_offset"] / self.f_scale,
                   min=row.lower / self.f_scale, max=row.upper / self.f_scale)
+        if self.fit_force_drift:
+            p.add("force_drift", value=start.get("force_drift", 0.0) / self.f_scale)
         return p
 
     def si(self, values: dict) -> dict:
-        """Internal values (a dict or lmfit Parameters) -> SI dict with all four model arguments."""
+        """Internal values (a dict or lmfit Parameters) -> SI dict with all five model arguments."""
         v = {k: float(getattr(values[k], "value", values[k])) for k in values}
         return {"work_of_adhesion": math.exp(min(v["ln_work_of_adhesion"], 700.0)),
                 "mu_h": math.exp(min(v["ln_mu_h"], 700.0)),
                 "x_offset": v.get("x_offset", 0.0) * self.x_scale,
-                "force_offset": v.get("force_offset", 0.0) * self.f_scale}
+                "force_offset": v.get("force_offset", 0.0) * self.f_scale,
+                "force_drift": v.get("force_drift", 0.0) * self.f_scale}
 
     def jacobian_to_si(self, si: dict) -> np.ndarray:
         """Diagonal d(SI)/d(internal) of the fitted parameters, in the order of :attr:`names`."""
@@ -117,6 +126,8 @@ class Parametrisation:
         if self.fit_x_offset:
             d.append(self.x_scale)
         if self.fit_force_offset:
+            d.append(self.f_scale)
+        if self.fit_force_drift:
             d.append(self.f_scale)
         return np.array(d)
 
@@ -126,8 +137,8 @@ def pull_off_term(gap: tuple[float, float, float], x_tp: float) -> float:
 
     The data place the pull-off anywhere between the last attached row and the first detached row
     (``gap`` = (x_attached, x_detached, soft), :attr:`~.model.CurveModel.jump`), so the likelihood of the
-    jump is censored, not Gaussian: P = Φ((hi - x_tp)/s) - Φ((lo - x_tp)/s), flat (P ≈ 1, a zero
-    residual) inside the gap and a wall outside (the residual grows as the distance in units of s).
+    jump is censored, not Gaussian: P = Φ((hi - x_tp)/s) - Φ((lo - x_tp)/s), nearly flat inside the gap
+    and rising outside (the residual grows as the distance in units of s).
     A Gaussian term about the gap's midpoint (σ = spacing/√12) pulled the turning point to the middle
     of the row gap, so W_ad and the slip ΔBIC moved with where the rows happened to fall.
     """
@@ -164,7 +175,7 @@ def residual_function(model: CurveModel, par: Parametrisation, scale: float, sig
         si = par.si(params.valuesdict())
         w, mu, off = si["work_of_adhesion"], si["mu_h"], si["x_offset"]
         try:
-            pred = model.predict(w, mu, off, si["force_offset"])
+            pred = model.predict(w, mu, off, si["force_offset"], si["force_drift"])
             r = (force - pred) / scale
             if jump is None:
                 return r
@@ -255,8 +266,23 @@ def _run_starts(residual, par, runs, *, scale_covar, labels=None):
     return best, starts, won
 
 
+#: rows at zero force needed at each end (before contact, after the detected jump) to fit a drift of the zero
+DRIFT_ROWS = 5
+
+
+def drift_supported(model: CurveModel) -> bool:
+    """Whether the rows pin a linear drift of the load-cell zero: at least :data:`DRIFT_ROWS` rows before
+    the contact point (the hinge fit of :mod:`.starts`) and after the detected jump."""
+    seg = model.segments
+    if seg.i_jump is None or model.x.size - seg.i_jump < DRIFT_ROWS:
+        return False
+    x_c = hinge_contact(model.x, model.force, seg.i_turn)[0]
+    return int(np.count_nonzero(model.x[: seg.i_turn + 1] < x_c)) >= DRIFT_ROWS
+
+
 def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
-             fit_force_offset: bool = True, extra_starts: list[dict] = (), n_runs: int = 2) -> RawFit:
+             fit_force_offset: bool = True, fit_force_drift: bool | None = None, extra_starts: list[dict] = (),
+             n_runs: int = 2) -> RawFit:
     """Fit W_ad, μh (and offsets) of one slip condition by least squares.
 
     Parameters
@@ -270,6 +296,9 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
         control.
     fit_force_offset : bool
         Fit a load-cell offset.
+    fit_force_drift : bool, optional
+        Fit a linear drift of the load-cell zero over the test; default: with the offset, where the rows
+        pin it (:func:`drift_supported`).
     extra_starts : list of dict
         More starts in SI (e.g. the other slip condition's optimum); always minimised.
     n_runs : int
@@ -283,7 +312,9 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     fit_x_offset = (control == "displacement") if fit_x_offset is None else bool(fit_x_offset)
     x_scale = float(np.ptp(model.x)) or 1.0
     f_scale = float(np.max(np.abs(model.force))) or 1.0
-    par = Parametrisation(x_scale, f_scale, control, fit_x_offset, fit_force_offset)
+    if fit_force_drift is None:
+        fit_force_drift = fit_force_offset and drift_supported(model)
+    par = Parametrisation(x_scale, f_scale, control, fit_x_offset, fit_force_offset, bool(fit_force_drift))
     scale = float(sigma) if sigma is not None else f_scale
     sigma_est = float(sigma) if sigma is not None else (noise_estimate(model.force) or 1e-3 * f_scale)
     residual = residual_function(model, par, scale, sigma_est)

@@ -104,7 +104,7 @@ def approximation_effect(raw: RawFit, sigma: float) -> Effect:
     """
     m, par = raw.model, raw.par
     si = par.si(raw.best.params)
-    args = (si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"])
+    args = (si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"], si["force_drift"])
     exact = CurveModel(m.curve, m.scene, m.slip, points=EXACT_POINTS, segments=m.segments, membrane="exact")
     free = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=m.segments)
     try:
@@ -118,7 +118,7 @@ def approximation_effect(raw: RawFit, sigma: float) -> Effect:
     si2 = par.si(res.params)
     shift = {k: si2[k] / si[k] - 1.0 for k in ("work_of_adhesion", "mu_h")}
     start = {k: si[k] / (1.0 + shift[k]) for k in shift}
-    start.update({k: 2 * si[k] - si2[k] for k in ("x_offset", "force_offset")})
+    start.update({k: 2 * si[k] - si2[k] for k in ("x_offset", "force_offset", "force_drift")})
     return Effect(slip=m.slip, force_error=err, sigma=float(sigma), shift=shift,
                   se={k: _rel_se(raw, k) for k in shift}, start=start)
 

@@ -58,8 +58,11 @@ OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offs
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
 #: succeed at a neighbouring one; the interpolants differ by ~1e-4 of the force, far below the noise)
 RETRY_POINTS = (0, 7, 19)
-#: the pull-off gap's soft edge is its width over this (:attr:`CurveModel.jump`)
-JUMP_SOFT = 8.0
+#: the pull-off gap's soft edge is its width over this (:attr:`CurveModel.jump`).  1: inside the gap -2 ln P
+#: varies by 0.25 only (no pull to the middle); outside it rises like a Gaussian of the gap's width, 3.5x
+#: softer than the old midpoint term.  A steep edge (width/8) let a misfit curve's pull-off dominate a
+#: series fit (a 25 % stiffer membrane dragged the shared μh by 4 % and flagged every curve)
+JUMP_SOFT = 1.0
 class ModelDomainError(AdhfitError, ValueError):
     """The parameters leave the model's domain (the history cannot be computed)."""
 
@@ -232,6 +235,8 @@ class CurveModel:
                        "lambda0": float(scene.prestretch)}
         if self.control == "pressure":
             self._fixed["d"] = float(unit.to_d(scene.gap))
+        #: row order as a fraction of the test, 0 at the first row and 1 at the last (the drift's basis)
+        self.row_fraction = np.arange(self.x.size) / max(self.x.size - 1, 1)
         self.n_histories = 0
         self.n_evaluations = 0
 
@@ -306,7 +311,7 @@ class CurveModel:
         return 1.0 / (sc.length if self.control == "displacement" else sc.pressure)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
-                force_offset: float = 0.0) -> np.ndarray:
+                force_offset: float = 0.0, force_drift: float = 0.0) -> np.ndarray:
         """Predicted force at every measured row, N (compressive positive).
 
         Parameters
@@ -318,7 +323,9 @@ class CurveModel:
         x_offset : float
             Added to the measured control values: displacement offset (m) or pressure offset (Pa).
         force_offset : float
-            Added to the predicted force (load-cell zero), N.
+            Added to the predicted force (load-cell zero at the first row), N.
+        force_drift : float
+            A linear drift of the zero from the first row to the last, N (added in row order).
 
         Raises
         ------
@@ -333,7 +340,8 @@ class CurveModel:
         f[self._attached] = pcs.f_unloading(xd[self._attached])
         if not self.fixed_split:
             f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
-        return f * self._scales(float(mu_h)).force + force_offset
+        out = f * self._scales(float(mu_h)).force + force_offset
+        return out + force_drift * self.row_fraction if force_drift else out
 
     def attached_weight(self, mu_h: float, x_offset: float, pcs: Pieces) -> np.ndarray:
         """Weight (0 detached .. 1 attached) of every unloading row, from the model's turning point.
@@ -369,8 +377,8 @@ class CurveModel:
 
         The jump happened between the last attached row and the first detached row, anywhere in that
         gap: the model's turning point must lie in it, and the likelihood is the probability that it
-        does (:func:`.lsq.pull_off_term`: flat inside, a wall outside), with an edge ``soft`` (1/8 of the
-        gap) for the rows' own imprecision.  ``None`` when the data end before pull-off.
+        does (:func:`.lsq.pull_off_term`: nearly flat inside, rising outside), with a soft edge ``soft``
+        (the gap's width) for the rows' own imprecision.  ``None`` when the data end before pull-off.
         """
         j = self.segments.i_jump
         if j is None or not self.fixed_split:

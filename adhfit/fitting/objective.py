@@ -34,7 +34,7 @@ _SHARED = ("ln_work_of_adhesion", "ln_mu_h")
 #: least noise level, as a fraction of the largest value of its block: noise-free data must not get an
 #: unbounded weight, and the model's own precision (the history interpolated at the rows) is ~1e-5 of it
 SIGMA_FLOOR = 1e-5
-_OFFSETS = ("x_offset", "force_offset")
+_OFFSETS = ("x_offset", "force_offset", "force_drift")
 
 
 class Values(dict):
@@ -154,7 +154,7 @@ class SharedParametrisation:
         v = {k: float(getattr(params[k], "value", params[k])) for k in params}
         per = [par.si(self.member_values(v, i)) for i, par in enumerate(self.pars)]
         shared = {"work_of_adhesion": per[0]["work_of_adhesion"], "mu_h": per[0]["mu_h"]}
-        return shared, [{"x_offset": s["x_offset"], "force_offset": s["force_offset"]} for s in per]
+        return shared, [{k: s[k] for k in _OFFSETS} for s in per]
 
 
 def block_sizes(members: list[Member]) -> list[tuple[int, int]]:
@@ -296,7 +296,7 @@ class ObjectiveFit:
         shared, offs = self.si()
         try:
             return m.model.predict(shared["work_of_adhesion"], shared["mu_h"], offs[i]["x_offset"],
-                                   offs[i]["force_offset"])
+                                   offs[i]["force_offset"], offs[i]["force_drift"])
         except ModelDomainError:
             return np.full(m.model.force.shape, np.nan)
 

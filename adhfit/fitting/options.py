@@ -53,6 +53,9 @@ class FitOptions:
         Fit the control offset (default: under displacement control only).
     fit_force_offset : bool
         Fit the load-cell zero.
+    fit_force_drift : bool, optional
+        Fit a linear drift of the load-cell zero over the test; default: where the rows before contact and
+        after pull-off pin it (with the zero).
     seed : int, optional
         Recorded (least squares); the root of every random number (MCMC).
     points : int
@@ -79,6 +82,7 @@ class FitOptions:
     contact_radius: bool = True
     fit_x_offset: bool | None = None
     fit_force_offset: bool = True
+    fit_force_drift: bool | None = None
     seed: int | None = None
     points: int = DEFAULT_POINTS
     profile: bool = True

@@ -45,7 +45,7 @@ DEFAULT_PRIOR_FACTOR = 100.0
 #: SI name -> internal (θ) name, as in :meth:`.lsq.Parametrisation.params`
 INTERNAL_NAMES = {"work_of_adhesion": "ln_work_of_adhesion", "mu_h": "ln_mu_h",
                   "displacement_offset": "x_offset", "pressure_offset": "x_offset",
-                  "force_offset": "force_offset"}
+                  "force_offset": "force_offset", "force_drift": "force_drift"}
 
 
 @dataclass(frozen=True)
@@ -92,7 +92,7 @@ class Prior:
         return float(stats.norm.logpdf(v, self.a, self.b)) - trunc + jac
 
     def describe(self) -> str:
-        unit = {"work_of_adhesion": "J/m^2", "mu_h": "N/m", "force_offset": "N"}.get(
+        unit = {"work_of_adhesion": "J/m^2", "mu_h": "N/m", "force_offset": "N", "force_drift": "N"}.get(
             self.name, "m" if self.name == "displacement_offset" else "Pa")
         if self.dist == "normal":
             return f"normal(mean={self.a:.4g}, sd={self.b:.4g}) {unit}" + (", truncated to > 0" if self.log else "")
@@ -127,7 +127,7 @@ def default_priors(par: Parametrisation, lsq_values: list[dict], scene_priors: d
             out[name] = Prior(name, "loguniform", min(vals) / DEFAULT_PRIOR_FACTOR,
                               max(vals) * DEFAULT_PRIOR_FACTOR, True)
             continue
-        key, factor = ("force_offset", par.f_scale) if name == "force_offset" else ("x_offset", par.x_scale)
+        key, factor = (name, par.f_scale) if name.startswith("force_") else ("x_offset", par.x_scale)
         half = max(factor, *(2.0 * abs(v[key]) for v in lsq_values))
         out[name] = Prior(name, "uniform", -half, half, False, factor)
     return out

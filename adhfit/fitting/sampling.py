@@ -105,7 +105,8 @@ class _Predict:
         v = dict(zip(self.target.internal, map(float, theta)))
         si = m.par.si(fit.spar.member_values(v, 0))
         try:
-            return m.model.predict(si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"])
+            return m.model.predict(si["work_of_adhesion"], si["mu_h"], si["x_offset"], si["force_offset"],
+                                   si["force_drift"])
         except ModelDomainError:
             return np.full(m.model.force.shape, np.nan)
 
@@ -233,7 +234,7 @@ def _offset_entries(curves: tuple, target: Target, samples: np.ndarray) -> list[
         c = dict(c, offsets={k: dict(v) for k, v in c["offsets"].items()})
         for k, name in enumerate(target.names):
             base, _, idx = name.rpartition("_")
-            if idx != str(i) or base not in (*OFFSET_NAME.values(), "force_offset"):
+            if idx != str(i) or base not in (*OFFSET_NAME.values(), "force_offset", "force_drift"):
                 continue
             lo, med, hi = np.percentile(samples[:, k], [2.5, 50.0, 97.5])
             short = base.removesuffix("_offset")

@@ -85,13 +85,14 @@ def _singles(problem, opts, segs, slips) -> dict:
             model = CurveModel(curve, scene, s, points=opts.points, segments=segs[i])
             extra = [dict(r.par.si(r.best.params), label=f"the {o} optimum") for o, r in done.items()]
             done[s] = fit_slip(model, sigma=opts.sigma, fit_x_offset=opts.fit_x_offset,
-                               fit_force_offset=opts.fit_force_offset, extra_starts=extra)
+                               fit_force_offset=opts.fit_force_offset, fit_force_drift=opts.fit_force_drift,
+                               extra_starts=extra)
         first = slips[0]
         if len(slips) > 1:  # the first condition from the second's optimum
             other = done[slips[1]]
             model = CurveModel(curve, scene, first, points=opts.points, segments=segs[i])
             again = fit_slip(model, sigma=opts.sigma, fit_x_offset=opts.fit_x_offset,
-                             fit_force_offset=opts.fit_force_offset, n_runs=0,
+                             fit_force_offset=opts.fit_force_offset, fit_force_drift=opts.fit_force_drift, n_runs=0,
                              extra_starts=[dict(other.par.si(other.best.params), label=f"the {slips[1]} optimum")])
             if again.best.chisqr < done[first].best.chisqr * (1.0 - 1e-9):
                 done[first] = again

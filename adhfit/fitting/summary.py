@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .checks import curve_rows
+from .checks import DRIFT_FLOOR, curve_rows
 from .intervals import estimates, profiles, split_hull
 from .model import ModelDomainError
 from .checks import correlation_factor, widen, zero_drift
@@ -150,8 +150,28 @@ def _curve_warnings(fit, k: int, row: dict, split, factor: float, est: dict) -> 
     return out
 
 
+def _fitted_drift(fit, k: int) -> str | None:
+    """The sentence for a fitted drift of the zero that the data resolve (2 standard errors, and above
+    the model's precision)."""
+    m = fit.members[k]
+    p = fit.best.params.get(fit.spar.name("force_drift", k))
+    if p is None:
+        return None
+    drift = p.value * m.par.f_scale
+    se = p.stderr * m.par.f_scale if p.stderr is not None and np.isfinite(p.stderr) else None
+    f_peak = float(np.max(np.abs(m.model.force)))
+    if se is None or abs(drift) <= max(2.0 * se, DRIFT_FLOOR * f_peak):
+        return None
+    return (f"The load-cell zero drifted by {drift * 1e3:+.3g} mN ({100 * abs(drift) / f_peak:.2g} % of the peak "
+            f"force) from the first row to the last; the fit removed it as a linear drift "
+            f"(offsets.force_drift ± {se * 1e3:.2g} mN). Re-tare the load cell before the next test.")
+
+
 def _drift(fit, k: int, row: dict, split) -> str | None:
-    """The zero-drift warning (:func:`.checks.zero_drift`) from the rows at zero model force."""
+    """The zero drift: fitted (:func:`_fitted_drift`), or else the warning of :func:`.checks.zero_drift`
+    from the rows at zero model force."""
+    if fit.members[k].par.fit_force_drift:
+        return _fitted_drift(fit, k)
     m = fit.members[k].model
     predicted = row["predicted"]
     if split is None or not np.all(np.isfinite(predicted)):

@@ -68,7 +68,7 @@ def _history(kw, end, points):
 def synthetic_curve(scene, slip: str, *, work_of_adhesion: float, mu_h: float, x_max: float,
                     rows: int = 200, noise: float = 0.005, x_offset: float = 0.0,
                     force_offset: float = 0.0, approach: float = 0.08, tail: float = 0.15,
-                    rng: np.random.Generator, points: int = 2000) -> tuple[Curve, dict]:
+                    rng: np.random.Generator, points: int = 2000, force_drift: float = 0.0) -> tuple[Curve, dict]:
     """A synthetic measured curve in SI units, and its truth.
 
     Parameters
@@ -89,6 +89,8 @@ def synthetic_curve(scene, slip: str, *, work_of_adhesion: float, mu_h: float, x
         True control value minus measured one (m or Pa); the fit's offset estimates it.
     force_offset : float
         Added to every force, N (load-cell zero).
+    force_drift : float
+        A drift of the load-cell zero, N, added linearly in row order (0 at the first row, this at the last).
     approach, tail : float
         Rows before contact and after pull-off, as fractions of the loading and unloading ranges.
     rng : numpy.random.Generator
@@ -127,11 +129,13 @@ def synthetic_curve(scene, slip: str, *, work_of_adhesion: float, mu_h: float, x
     f_true = sc.from_f(np.concatenate([f_up, f_down]))
     sigma = noise * float(sc.from_f(fl[-1]))
     force = f_true + force_offset + rng.normal(0.0, sigma, f_true.size)
+    force = force + force_drift * np.arange(force.size) / max(force.size - 1, 1)
     x = from_x(np.concatenate([up, down])) - x_offset
     curve = Curve(path="<synthetic>", control=scene.control, x=x, force=force,
                   line=np.arange(2, x.size + 2), i_turn=int(np.argmax(x)))
     truth = {"slip": slip, "work_of_adhesion": float(work_of_adhesion), "mu_h": float(mu_h),
              "x_offset": float(x_offset), "force_offset": float(force_offset), "sigma": sigma,
+             "force_drift": float(force_drift),
              "x_turning_point": float(from_x(x_tp)) - x_offset, "force_turning_point": float(sc.from_f(f_tp)),
              "i_jump": int(up.size + np.count_nonzero(down >= x_tp))}
     return curve, truth
