@@ -12,7 +12,7 @@ from pathlib import Path
 from .arguments import fit_force_offset, fit_x_offset, read_options
 from .engine import EngineLoader, elapsed
 from .painter import Painter
-from .writing import check_output_dir, summary_text
+from .writing import check_output_dir, exit_status, summary_text
 
 __all__ = ["run_fit"]
 
@@ -82,4 +82,4 @@ def _fit_one(args, painter, engine) -> int:
         text = (f"MCMC {state}; {probs}; seed {result.mcmc['seed']}\n{text}\n"
                 "MCMC outputs: fit_mcmc.png, corner.png, chain.h5")
     print(text)
-    return 0
+    return exit_status(result)

@@ -37,7 +37,7 @@ def run_global(args) -> int:
     from ..scene import load_scene  # noqa: PLC0415
     from ..units import parse_quantity  # noqa: PLC0415
     from .arguments import fit_force_offset, fit_x_offset, read_options  # noqa: PLC0415
-    from .writing import check_output_dir  # noqa: PLC0415
+    from .writing import check_output_dir, exit_status  # noqa: PLC0415
     out = check_output_dir(args.output if args.output is not None else Path("adhfit_global_fit"))
     jobs = _jobs(args)
     scenes = [load_scene(j.scene) for j in jobs]
@@ -57,7 +57,7 @@ def run_global(args) -> int:
                  membrane=getattr(args, "membrane", None), **by_method)
     write(result, out, plot=not args.no_plot)
     print(_summary(result, out))
-    return 0
+    return exit_status(result)
 
 
 def _summary(result, out: Path) -> str:

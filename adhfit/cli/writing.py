@@ -7,7 +7,16 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["check_output_dir", "summary_text", "estimate_line"]
+__all__ = ["check_output_dir", "summary_text", "estimate_line", "exit_status", "EXIT_MISFIT"]
+
+#: ``adhfit fit``'s exit status when the reports are written but the model does not describe the data
+#: (the first warning says why and names the likely causes: a unit, a scene setting, the slip condition)
+EXIT_MISFIT = 5
+
+
+def exit_status(result) -> int:
+    """0, or :data:`EXIT_MISFIT` when the reported fit does not describe the data."""
+    return EXIT_MISFIT if result.fits[result.reported_slip].misfit else 0
 
 
 def check_output_dir(path: Path) -> Path:
@@ -48,7 +57,8 @@ def summary_text(result, out: Path) -> str:
     for name, e in shown.items():
         lines.append(estimate_line(name, e))
     for w in d.get("warnings", []) or []:  # a fit that did not converge is said on the command line too
-        if w.startswith(("The fit did not converge", "MCMC NOT CONVERGED")):
+        if w.startswith(("The fit did not converge", "MCMC NOT CONVERGED")) or \
+                "The model does not describe these data" in w:
             lines.append(f"WARNING: {w}")
     n_warn = len(d.get("warnings", []) or [])
     lines.append(f"{n_warn} warning(s); {d.get('model_evaluations')} model evaluations, "

@@ -154,6 +154,9 @@ class SlipFit:
     autocorrelation, widening : float
         Lag-1 autocorrelation of the residuals and the factor the intervals were widened by
         (:mod:`.checks`).
+    misfit : bool
+        The model does not describe the data to within their row-to-row scatter (a unit, a scene
+        setting or the slip condition wrong, or correlated noise): the slip verdict is capped.
     """
 
     slip: str
@@ -180,6 +183,7 @@ class SlipFit:
     split: int | None = None
     autocorrelation: float = 0.0
     widening: float = 1.0
+    misfit: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "predicted", _readonly(self.predicted))
@@ -194,6 +198,7 @@ class SlipFit:
                       "message": self.message, "warnings": list(self.warnings),
                       "diagnostics": list(self.diagnostics), "first_detached_row": self.split,
                       "residual_autocorrelation": self.autocorrelation, "interval_widening": self.widening,
+                      "misfit": self.misfit,
                       "starts": list(self.starts),
                       "profile": dict(self.profile), "model_evaluations": self.n_evaluations,
                       "histories": self.n_histories})

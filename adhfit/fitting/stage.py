@@ -71,7 +71,21 @@ def decide(summaries: dict) -> dict:
         f2 = summaries[best].widening ** 2
         bic = {s: bic[best] + (v - bic[best]) / f2 for s, v in bic.items()}
         aic = {s: aic[best] + (v - aic[best]) / f2 for s, v in aic.items()}
+        if summaries[best].misfit:  # a model that does not describe the data earns no strong verdict
+            return cap(compare(bic, aic))
     return compare(bic, aic)
+
+
+def cap(verdict: dict) -> dict:
+    """The verdict of a fit the model does not describe: at most 'positive' evidence, nothing selected."""
+    if verdict["evidence"] not in ("strong", "very strong"):
+        return verdict
+    fav, d = verdict["favoured"], verdict["delta_bic"]
+    return dict(verdict, selected=None, evidence="positive", capped=verdict["evidence"],
+                verdict=f"{fav}: positive evidence at most, not selected (ΔBIC = {d:.2g}; the model does not "
+                        f"describe these data)",
+                explanation=f"ΔBIC = {d:.1f} would be {verdict['evidence']} evidence for {fav}, but the model does "
+                            f"not describe these data to within their scatter, so the verdict is capped at 'positive'.")
 
 
 def _singles(problem, opts, segs, slips) -> dict:

@@ -19,7 +19,7 @@ from .checks import correlation_factor, widen, zero_drift
 from .result import SlipFit
 from .starts import noise_estimate
 
-__all__ = ["summarize", "DISAGREE", "model_curve", "status_warnings"]
+__all__ = ["summarize", "DISAGREE", "model_curve", "status_warnings", "MISFIT_RATIO", "MISFIT_HEAD"]
 
 #: profile and covariance half-widths differing by more than this fraction earn a note
 DISAGREE = 0.25
@@ -27,6 +27,10 @@ _PLAIN = {"work_of_adhesion": "W_ad", "mu_h": "μh"}
 #: RMS residual, as a fraction of the largest force, below which the residuals are the model's own
 #: numerical error (3x its interpolation error at the default points), not noise
 NUMERICAL = 3e-4
+#: residual RMS over the row-to-row scatter above which the model does not describe a curve
+MISFIT_RATIO = 2.0
+#: how every misfit sentence begins (the result puts it first; the command line prints it)
+MISFIT_HEAD = "The model does not describe these data to within their row-to-row scatter"
 
 
 def model_curve(model, si: dict) -> dict:
@@ -134,12 +138,8 @@ def _curve_warnings(fit, k: int, row: dict, split, factor: float, est: dict) -> 
     m = fit.members[k]
     who = "" if len(fit.members) == 1 else f"Curve {m.label}: "
     out = []
-    sigma = row["sigma_force"]
-    noise = noise_estimate(m.model.force)
-    if factor == 1.0 and noise > 0 and sigma > 2.0 * noise:
-        out.append(f"{who}The model does not follow the data to within the noise: the residuals ({sigma * 1e3:.3g} mN) "
-                   f"are {sigma / noise:.2g} times the row-to-row scatter ({noise * 1e3:.3g} mN). Check the scene "
-                   f"(geometry, pressure or gap), the units and the slip condition.")
+    if row.get("misfit"):
+        out.append(who + row["misfit"])
     if fit.given["force"] and row["redchi"] > 1.0 + 4.0 * math.sqrt(2.0 / max(m.n_force - len(m.par.names), 1)):
         out.append(f"{who}The model does not fit to the given noise level: reduced χ² = {row['redchi']:.3g}.")
     if split is None and est["work_of_adhesion"].status == "determined":
@@ -148,6 +148,23 @@ def _curve_warnings(fit, k: int, row: dict, split, factor: float, est: dict) -> 
     if drift:
         out.append(who + drift)
     return out
+
+
+def _misfit(row: dict, member, factor: float, rho: float) -> str | None:
+    """The sentence for a curve the model does not describe: residuals above :data:`MISFIT_RATIO` times
+    the row-to-row scatter (second differences, which a smooth misfit leaves alone).  Correlated noise
+    (an oversampled, filtered load cell) can look the same, so both are named; a misfit comes first."""
+    sigma, noise = row["sigma_force"], noise_estimate(member.model.force)
+    if not (noise > 0 and sigma > MISFIT_RATIO * noise):
+        return None
+    follow = f" and follow one another from row to row (lag-1 autocorrelation {rho:.2f})" if factor > 1.0 else ""
+    tail = (f" If instead the load cell's noise is correlated (an oversampled, filtered signal), the intervals, "
+            f"widened {factor:.2g}-fold, allow for it." if factor > 1.0 else "")
+    return (f"{MISFIT_HEAD}: the residuals ({sigma * 1e3:.3g} mN) are {sigma / noise:.2g} times the row-to-row "
+            f"scatter ({noise * 1e3:.3g} mN){follow}. Likely causes: a unit or scale on a column (a force in mN "
+            f"headed [N], a displacement in mm headed [um]), the scene's pressure or gap (a bare number is read in "
+            f"Pa or m) or a radius (a bare number is in metres), or the slip condition. The slip verdict is "
+            f"capped at 'positive'.{tail}")
 
 
 def _fitted_drift(fit, k: int) -> str | None:
@@ -227,7 +244,9 @@ def summarize(fit, *, profile: bool = True) -> SlipFit:
                  for k, (lo, hi) in limits.items()}
     lower = est["work_of_adhesion"].status == "lower_bound"
     warn = status_warnings(est, reached(fit) if lower else None)
-    if factor > 1.0:
+    for row, m in zip(rows, fit.members):
+        row["misfit"] = _misfit(row, m, factor, rho)
+    if factor > 1.0 and not any(r["misfit"] for r in rows):
         which = "" if len(rows) == 1 else " of at least one curve"
         warn.append(f"The force noise{which} is correlated from row to row (lag-1 autocorrelation {rho:.2f}): "
                     f"the rows are denser than the noise is independent, so the intervals were widened "
@@ -246,4 +265,4 @@ def summarize(fit, *, profile: bool = True) -> SlipFit:
                    n_histories=sum(m.n_histories for m in models), success=bool(best.success),
                    message=str(best.message), raw=best if not fit.joint else fit,
                    diagnostics=tuple(_diagnostics(fit, est, limits)), split=splits[0] if one else None,
-                   autocorrelation=rho, widening=factor)
+                   autocorrelation=rho, widening=factor, misfit=any(bool(r["misfit"]) for r in rows))
