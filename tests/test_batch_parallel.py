@@ -82,7 +82,7 @@ def test_a_dask_cluster_gives_the_serial_rows(folder, serial, tmp_path):
 
 def test_a_scheduler_that_does_not_answer_is_one_line(folder, tmp_path, capsys, monkeypatch):
     pytest.importorskip("distributed")
-    from adhfit.fitting import runners
+    from adhfit.cli import runners
     monkeypatch.setattr(runners, "CONNECT_TIMEOUT", "1s")
     status = main(["fit", str(folder), "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "o")])
     err = capsys.readouterr().err

@@ -301,7 +301,7 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
 
     ``args.workers`` is ``None`` for one process per core; a Namespace without it runs in this process.
     """
-    from ..fitting.runners import default_workers  # noqa: PLC0415
+    from .runners import default_workers  # noqa: PLC0415
     address = getattr(args, "scheduler", None)
     workers = getattr(args, "workers", 1)
     if address is not None:
@@ -343,7 +343,7 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
         for call in calls:
             report(run_job(*call))
     else:
-        from ..fitting import runners  # noqa: PLC0415
+        from . import runners  # noqa: PLC0415
         def crashed(i: int, message: str) -> Outcome:
             return _failed(i, jobs[i], base, message, args)
         if kind == "local":
