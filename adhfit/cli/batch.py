@@ -39,6 +39,7 @@ import dataclasses
 import io
 import json
 import os
+import shutil
 import sys
 import threading
 import time
@@ -48,6 +49,9 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
 from ..errors import AdhfitError, InputError
+from .interrupt import EXIT_INTERRUPTED
+from .runs import RunInfo, RunLock, clear_staging, file_sha256, new_run, publish, retire, reusable_report
+from .writing import writable_folder
 
 #: modules a local worker needs, imported once by a fork server (where the workers are not forked from
 #: this process)
@@ -55,10 +59,13 @@ PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.fit", "adhfit.data", "adhfit.scene"
            "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot", "matplotlib")
 
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
-           "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED"]
+           "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED",
+           "EXIT_INTERRUPTED", "INTERRUPTED"]
 
 SCENE_NAME = "scene.toml"
 EXIT_SOME_FAILED = 1
+#: the status of a curve a Ctrl-C left unfinished
+INTERRUPTED = "interrupted"
 _PARAMS = ("work_of_adhesion", "mu_h")
 #: the files a folder stands for: text exports (LabVIEW included); a folder of other .txt files is common
 CURVE_PATTERNS = ("*.csv", "*.tsv", "*.lvm")
@@ -67,7 +74,7 @@ CURVE_PATTERNS = ("*.csv", "*.tsv", "*.lvm")
 COLUMNS = (["file", "status", "error"]
            + [f"{p}{s}" for p in _PARAMS for s in ("", "_stderr", "_ci95_low", "_ci95_high")]
            + ["slip_selected", "slip_verdict", "slip_reported", "delta_bic", "redchi", "n_warnings", "warnings",
-              "report_dir", "scene", "sha256", "adhfit_version", "method", "seed", "wall_time_s"])
+              "report_dir", "scene", "sha256", "adhfit_version", "method", "seed", "wall_time_s", "run_id"])
 
 
 @dataclass(frozen=True)
@@ -78,6 +85,8 @@ class Job:
     scene: Path | None
     out: Path
     scene_note: str = ""
+    #: why the file cannot be fitted, found before any fit (an unreadable file, a link out of the folder)
+    problem: str = ""
 
 
 def is_batch(data: Iterable[Path]) -> bool:
@@ -111,47 +120,73 @@ def _nearest_scene(csv_path: Path, root: Path) -> Path | None:
         folder = folder.parent
 
 
+def _found(folder: Path, outdir: Path | None) -> list[Path]:
+    """The curve files below ``folder``: files, and links (followed or not, they are listed)."""
+    return sorted(f for pattern in CURVE_PATTERNS for f in folder.rglob(pattern)
+                  if (f.is_file() or f.is_symlink()) and not _skip(f, folder, outdir))
+
+
+def _problem(f: Path, root: Path | None) -> str:
+    """Why ``f`` cannot be fitted, or ``""``.  ``root``: the folder it was found in (None: given by name,
+    where a link is the user's own choice)."""
+    if f.is_symlink():
+        target = Path(os.path.realpath(f))
+        if not target.exists():
+            return f"a broken symbolic link (to {target}); remove it or point it at a curve file"
+        if root is not None and not target.is_relative_to(root.resolve()):
+            return (f"a symbolic link to {target}, outside the folder {root} given; links out of the folder "
+                    "are not followed: copy the file into the folder, or name it on the command line")
+    if not f.is_file():
+        return "not a regular file; give a curve file"
+    if not os.access(f, os.R_OK):
+        return "cannot be read (permission denied); make it readable (chmod +r) or move it out of the folder"
+    return ""
+
+
 def discover(paths: Iterable[str | Path], *, scene: str | Path | None = None,
              outdir: str | Path | None = None) -> list[Job]:
     """The curves to fit, each with its scene and output folder (rules in the module docstring).
+
+    A file that cannot be fitted (unreadable, a broken link, a link pointing out of the folder given)
+    is a job with a ``problem``: a failed row, never the end of the run.
 
     Raises
     ------
     InputError
         A path that does not exist, or no CSV file at all.
     """
-    found: list[tuple[Path, Path]] = []  # (csv, the root it was found under)
+    found: list[tuple[Path, Path, bool]] = []  # (csv, the root it was found under, found in a folder?)
     outdir = None if outdir is None else Path(outdir)
     for raw in paths:
         p = Path(raw)
         if p.is_dir():
-            files = sorted(f for pattern in CURVE_PATTERNS for f in p.rglob(pattern)
-                           if f.is_file() and not _skip(f, p, outdir))
-            found += [(f, p) for f in files]
+            found += [(f, p, True) for f in _found(p, outdir)]
         elif p.is_file():
-            found.append((p, p.parent))
+            found.append((p, p.parent, False))
         else:
             raise InputError("DATA", str(p), "an existing CSV file or folder")
     if not found:
         raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one *.csv, *.tsv or *.lvm file")
     seen, unique = set(), []
-    for f, root in found:
-        key = f.resolve()
+    for f, root, in_folder in found:
+        key = Path(os.path.realpath(f))
         if key not in seen:
             seen.add(key)
-            unique.append((f, root))
-    base = Path(os.path.commonpath([str(r.resolve()) for _, r in unique]))
+            unique.append((f, root, in_folder))
+    base = Path(os.path.commonpath([str(r.resolve()) for _, r, _ in unique]))
     out = Path(outdir) if outdir is not None else Path("adhfit_fit")
     jobs = []
-    for f, root in unique:
-        rel = f.resolve().relative_to(base).with_suffix("")
+    for f, root, in_folder in unique:
+        # the file's place below the folder given (a link's own name, not its target's)
+        rel = (root.resolve() / f.relative_to(root)).relative_to(base).with_suffix("")
         if scene is not None:
             sc, note = Path(scene), "--scene"
         else:
             sc = _nearest_scene(f, root)
             note = "nearest scene.toml" if sc else (f"no {SCENE_NAME} next to the file or in a parent folder "
                                                      f"up to {root}; give --scene")
-        jobs.append(Job(data=f, scene=sc, out=out / rel, scene_note=note))
+        jobs.append(Job(data=f, scene=sc, out=out / rel, scene_note=note,
+                        problem=_problem(f, root if in_folder else None)))
     return jobs
 
 
@@ -218,14 +253,20 @@ def _cell(v: Any) -> Any:
 
 
 def write_summary(rows: list[Mapping[str, Any]], path: str | Path) -> Path:
-    """Write summary.csv (:data:`COLUMNS`; empty cells where a value is missing)."""
+    """Write summary.csv (:data:`COLUMNS`; empty cells where a value is missing), atomically: a reader
+    sees the old table or the new one, never half of one."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=COLUMNS, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: _cell(r.get(k)) for k in COLUMNS})
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with tmp.open("w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=COLUMNS, extrasaction="ignore")
+            w.writeheader()
+            for r in rows:
+                w.writerow({k: _cell(r.get(k)) for k in COLUMNS})
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
 
 
@@ -244,6 +285,8 @@ class Outcome:
     row: dict[str, Any]
     output: str = ""
     error: str | None = None
+    #: re-used from an earlier run's reports (``--resume``), not fitted now
+    resumed: bool = False
 
 
 #: one fit at a time per process: a Dask worker may run tasks in threads, and a fit redirects standard
@@ -266,34 +309,62 @@ def _failed(index: int, job: Job, base: str, error: BaseException | str, args: N
     return Outcome(index, row, output, row["error"])
 
 
-def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace], int], base: str) -> Outcome:
+def _fit_into(folder: Path, here: Job, args: Namespace, fit_one: Callable[[Namespace], int],
+              buf: io.StringIO) -> None:
+    """The single-curve fit of ``here`` with its reports (and the thumbnail) written into ``folder``."""
+    if here.problem:
+        raise InputError("DATA", str(here.data), "a readable curve file", here.problem)
+    if here.scene is None:
+        raise InputError("scene", None, f"a scene file ({here.scene_note})")
+    # one curve per process at a time: every core already fits, so no second process draws
+    one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": folder, "painter": False})
+    with contextlib.redirect_stdout(buf):
+        status = fit_one(one)
+    if status != 0:
+        raise RuntimeError(f"the fit ended with exit status {status}")
+    if not getattr(args, "no_plot", False):  # summary.html's small figure, drawn here on every core
+        from ..report.thumbnails import write_thumbnail  # noqa: PLC0415
+        write_thumbnail(folder)
+
+
+def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace], int], base: str,
+            run: RunInfo | None = None) -> Outcome:
     """Fit one curve of a batch, in whichever process runs it; never raises for a bad curve.
 
     Paths are resolved against ``base`` (the working folder of the process that made the jobs); the
-    summary row keeps them as given, so it does not depend on where the job ran.
+    summary row keeps them as given, so it does not depend on where the job ran.  With ``run`` (a batch
+    run, :mod:`.runs`), the reports are written into a staging folder and moved into the curve's folder
+    only when complete; a failure removes the curve's older reports.
     """
     here = _absolute(job, base)
     buf = io.StringIO()
     with _ONE_AT_A_TIME:
+        stage = None if run is None else run.stage(index)
         try:
-            if job.scene is None:
-                raise InputError("scene", None, f"a scene file ({job.scene_note})")
-            # one curve per process at a time: every core already fits, so no second process draws
-            one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": here.out,
-                               "painter": False})
-            with contextlib.redirect_stdout(buf):
-                status = fit_one(one)
-            if status != 0:
-                raise RuntimeError(f"the fit ended with exit status {status}")
+            if stage is not None:
+                shutil.rmtree(stage, ignore_errors=True)
+            _fit_into(here.out if stage is None else stage, here, args, fit_one, buf)
+            if stage is not None:
+                publish(stage, here.out, {"run_id": run.run_id, "scene_sha256": file_sha256(here.scene),
+                                          "settings_sha256": run.settings_sha256})
             report = json.loads((here.out / "report.json").read_text(encoding="utf-8"))
-            if not getattr(args, "no_plot", False):  # summary.html's small figure, drawn here on every core
-                from ..report.thumbnails import write_thumbnail  # noqa: PLC0415
-                write_thumbnail(here.out)
-            return Outcome(index, summary_row(job, report), buf.getvalue())
+            row = {**summary_row(job, report), "run_id": "" if run is None else run.run_id}
+            return Outcome(index, row, _printed(buf, stage, here.out))
         except KeyboardInterrupt:
             raise
         except Exception as err:  # noqa: BLE001 - one bad curve must not stop the batch; it is listed
-            return _failed(index, job, base, err, args, buf.getvalue())
+            if stage is not None:
+                shutil.rmtree(stage, ignore_errors=True)
+                retire(here.out)  # an older report must not pass for this run's
+            out = _failed(index, job, base, err, args, _printed(buf, stage, here.out))
+            out.row["run_id"] = "" if run is None else run.run_id
+            return out
+
+
+def _printed(buf: io.StringIO, stage: Path | None, dest: Path) -> str:
+    """What the fit printed, naming the curve's folder rather than the staging one."""
+    text = buf.getvalue()
+    return text if stage is None else text.replace(str(stage), str(dest))
 
 
 def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
@@ -315,46 +386,112 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
     return ("serial", None) if workers == 1 or n_jobs == 1 else ("local", workers)
 
 
+def _resume(jobs: list[Job], run: RunInfo, base: str, args: Namespace) -> dict[int, Outcome]:
+    """``--resume``: the curves whose reports a batch wrote from the same bytes, scene and settings."""
+    found = {}
+    for i, job in enumerate(jobs):
+        here = _absolute(job, base)
+        if job.problem or here.scene is None:
+            continue
+        report = reusable_report(here.out, file_sha256(here.data), file_sha256(here.scene), run.settings_sha256)
+        if report is not None:
+            row = {**summary_row(job, report), "run_id": report["batch"].get("run_id", "")}
+            found[i] = Outcome(i, row, "", None, resumed=True)
+    return found
+
+
+def _interrupted(index: int, job: Job, run: RunInfo) -> Outcome:
+    """The row of a curve a Ctrl-C left unfinished (running or queued)."""
+    row = {"file": str(job.data), "status": INTERRUPTED, "report_dir": str(job.out),
+           "scene": "" if job.scene is None else str(job.scene), "run_id": run.run_id,
+           "error": "not fitted: the batch was interrupted (Ctrl-C) before this curve finished; "
+                    "re-run with --resume to fit only the curves left"}
+    return Outcome(index, row, "", row["error"])
+
+
+def _run_jobs(jobs: list[Job], todo: list[int], args: Namespace, fit_one: Callable[[Namespace], int],
+              base: str, run: RunInfo, report: Callable[[Outcome], None]) -> None:
+    """Fit the jobs ``todo`` with the runner ``args`` ask for (a Ctrl-C raises KeyboardInterrupt)."""
+    kind, how = _runner(args, len(todo))
+    job_args = Namespace(**{k: v for k, v in vars(args).items() if k != "run"})  # what a worker needs
+    calls = [(i, jobs[i], job_args, fit_one, base, run) for i in todo]
+    if kind == "serial":
+        for call in calls:
+            report(run_job(*call))
+        return
+    from . import runners  # noqa: PLC0415
+
+    def crashed(pos: int, message: str) -> Outcome:
+        i = calls[pos][0]
+        out = _failed(i, jobs[i], base, message, args)
+        out.row["run_id"] = run.run_id
+        return out
+    if kind == "local":
+        from .engine import start_engine  # noqa: PLC0415
+        from .engine import engine_cache_is_cold  # noqa: PLC0415
+        if engine_cache_is_cold():  # compiled once here, with a clock, instead of in every worker at once
+            start_engine("displacement", quiet=getattr(args, "quiet", False))
+        runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
+    else:
+        runners.run_dask(run_job, calls, how, report, crashed)
+
+
 def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
     """Fit every curve of ``args.data`` with ``fit_one`` (the single-curve ``adhfit fit``); returns the exit
     status.  ``args.workers`` local processes (``None``: one per core; absent: this process) or the Dask
     scheduler at ``args.scheduler`` run the curves; the summary is the same whichever does.  Prints one
-    line per curve as it finishes and, at the end, the failures, on standard error."""
+    line per curve as it finishes and, at the end, the failures, on standard error.  The output folder is
+    locked for the run, and a Ctrl-C ends it with the summary of what finished (:mod:`.runs`)."""
     data = [Path(p) for p in args.data]
-    outdir = args.output if args.output is not None else _default_outdir(data)
+    outdir = Path(args.output if args.output is not None else _default_outdir(data))
     if args.scene is not None and not Path(args.scene).is_file():
         raise InputError("--scene", str(args.scene), "an existing scene file (TOML)")
     jobs = discover(data, scene=args.scene, outdir=outdir)
-    kind, how = _runner(args, len(jobs))
+    _runner(args, len(jobs))  # invalid --workers / --scheduler: said before anything is written
+    run = new_run(outdir, args)
+    lock = RunLock(writable_folder(outdir), run.run_id)
+    lock.acquire()
+    try:
+        clear_staging(outdir)  # what dead runs left half-written
+        return _batch(jobs, args, fit_one, outdir, run)
+    finally:
+        lock.release()
+
+
+def _batch(jobs: list[Job], args: Namespace, fit_one: Callable[[Namespace], int], outdir: Path,
+           run: RunInfo) -> int:
     outcomes: dict[int, Outcome] = {}
     t0 = time.perf_counter()
     base = os.getcwd()
 
     def report(out: Outcome) -> None:
         outcomes[out.index] = out
-        print(f"[{len(outcomes)}/{len(jobs)}] {jobs[out.index].data}", file=sys.stderr, flush=True)
+        note = f" (resumed: reports of run {out.row.get('run_id')})" if out.resumed else ""
+        print(f"[{len(outcomes)}/{len(jobs)}] {jobs[out.index].data}{note}", file=sys.stderr, flush=True)
         if out.output:
             print(out.output, end="", flush=True)
         if out.error is not None:
             print(f"    failed: {out.error}", file=sys.stderr, flush=True)
 
-    calls = [(i, job, args, fit_one, base) for i, job in enumerate(jobs)]
-    if kind == "serial":
-        for call in calls:
-            report(run_job(*call))
-    else:
-        from . import runners  # noqa: PLC0415
-        def crashed(i: int, message: str) -> Outcome:
-            return _failed(i, jobs[i], base, message, args)
-        if kind == "local":
-            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
-        else:
-            runners.run_dask(run_job, calls, how, report, crashed)
+    for out in (_resume(jobs, run, base, args) if getattr(args, "resume", False) else {}).values():
+        report(out)
+    interrupted = False
+    try:
+        _run_jobs(jobs, [i for i in range(len(jobs)) if i not in outcomes], args, fit_one, base, run, report)
+    except KeyboardInterrupt:
+        interrupted = True
+    for i, job in enumerate(jobs):
+        if i not in outcomes:
+            outcomes[i] = _interrupted(i, job, run)
     rows = [outcomes[i].row for i in range(len(jobs))]
+    table = _write_summaries(rows, outdir)
+    if interrupted:
+        done = sum(1 for o in outcomes.values() if o.row.get("status") != INTERRUPTED)
+        print(f"adhfit: interrupted (Ctrl-C) after {done} of {len(jobs)} curves; wrote {table} and summary.html "
+              f"(the other {len(jobs) - done} listed as interrupted); --resume fits only those", file=sys.stderr,
+              flush=True)
+        return EXIT_INTERRUPTED
     failures = [(jobs[i], outcomes[i].error) for i in range(len(jobs)) if outcomes[i].error is not None]
-    table = write_summary(rows, Path(outdir) / "summary.csv")
-    from ..report.summary_html import write_summary_html  # noqa: PLC0415 - a page to look at, next to the table
-    write_summary_html(rows, Path(outdir))
     ok = len(jobs) - len(failures)
     print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - t0:.1f} s; wrote {table} and summary.html")
     if failures:
@@ -363,3 +500,11 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
             print(f"  {job.data}: {message}", file=sys.stderr)
         return EXIT_SOME_FAILED
     return 0
+
+
+def _write_summaries(rows: list[dict[str, Any]], outdir: Path) -> Path:
+    """summary.csv, and summary.html linking only the reports this summary vouches for (status ok)."""
+    table = write_summary(rows, outdir / "summary.csv")
+    from ..report.summary_html import write_summary_html  # noqa: PLC0415 - a page to look at, next to the table
+    write_summary_html([r if r.get("status") == "ok" else {**r, "report_dir": ""} for r in rows], outdir)
+    return table

@@ -1,0 +1,118 @@
+"""Ctrl-C on the command line: one line, exit status 130, no process left behind (docs/contracts.md A9).
+
+While a command runs, :func:`interruptible` installs a SIGINT handler that
+
+- in the process that runs the command: kills every process it started (worker processes, the MCMC
+  samplers, the figure painter, and theirs) and raises :class:`KeyboardInterrupt`, which the command
+  turns into its own one-line report (a batch writes its summary first);
+- in a process forked from it (the handler is inherited by ``fork``): exits at once and silently, since
+  the terminal sends Ctrl-C to every process of the foreground group and only the parent speaks;
+- on a second Ctrl-C: exits at once.
+
+Library code never sees any of this: it only ever gets a :class:`KeyboardInterrupt`.
+"""
+from __future__ import annotations
+
+import functools
+import os
+import signal
+import sys
+import threading
+from typing import Callable
+
+__all__ = ["EXIT_INTERRUPTED", "interruptible", "descendants", "kill_descendants", "INTERRUPTED_LINE"]
+
+#: the customary status of a program stopped by SIGINT (128 + 2)
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+#: what a single-curve command prints when Ctrl-C stops it
+INTERRUPTED_LINE = "adhfit: interrupted (Ctrl-C); stopped before the reports were complete"
+
+_state = {"pid": None, "hits": 0}
+
+
+def _children_map() -> dict[int, list[int]] | None:
+    """parent pid -> child pids, from /proc (None where there is no /proc)."""
+    if not os.path.isdir("/proc/self"):
+        return None
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", encoding="ascii", errors="replace") as fh:
+                stat = fh.read()
+        except OSError:  # the process ended while we looked
+            continue
+        try:  # "pid (comm) state ppid ...": comm may hold spaces and parentheses
+            ppid = int(stat.rsplit(")", 1)[1].split()[1])
+        except (IndexError, ValueError):
+            continue
+        children.setdefault(ppid, []).append(int(entry))
+    return children
+
+
+def descendants(pid: int | None = None) -> list[int]:
+    """Every live process below ``pid`` (default: this one), children first.
+
+    Linux: the whole tree, from /proc.  Elsewhere: the processes this one started with
+    :mod:`multiprocessing` (their own children die with them, see :mod:`.runners`).
+    """
+    pid = os.getpid() if pid is None else pid
+    tree = _children_map()
+    if tree is None:
+        import multiprocessing  # noqa: PLC0415
+        return [p.pid for p in multiprocessing.active_children() if p.pid] if pid == os.getpid() else []
+    found, todo = [], [pid]
+    while todo:
+        kids = tree.get(todo.pop(), [])
+        found += kids
+        todo += kids
+    return found
+
+
+def kill_descendants() -> None:
+    """SIGKILL every process below this one (twice over: a child may have forked while we looked)."""
+    for _ in range(2):
+        pids = descendants()
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:  # gone already, or not ours
+                pass
+        if not pids:
+            return
+
+
+def _on_sigint(signum: int, frame) -> None:  # noqa: ARG001 - the signal module's signature
+    if os.getpid() != _state["pid"]:
+        os._exit(EXIT_INTERRUPTED)  # a forked helper: leave quietly, the parent reports
+    _state["hits"] += 1
+    kill_descendants()
+    if _state["hits"] > 1:
+        try:
+            sys.stderr.write("adhfit: interrupted again; stopped at once\n")
+            sys.stderr.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)
+    raise KeyboardInterrupt
+
+
+def interruptible(command: Callable[..., int]) -> Callable[..., int]:
+    """``command`` (a sub-command: parsed arguments -> exit status) with Ctrl-C handled as the module
+    docstring says.  A :class:`KeyboardInterrupt` that reaches this wrapper prints
+    :data:`INTERRUPTED_LINE` and returns :data:`EXIT_INTERRUPTED`; a command that reports its own
+    interruption (a batch) returns that status itself."""
+    @functools.wraps(command)
+    def run(*args, **kwargs) -> int:
+        if threading.current_thread() is not threading.main_thread():
+            return command(*args, **kwargs)  # signal handlers belong to the main thread
+        previous = signal.signal(signal.SIGINT, _on_sigint)
+        _state.update(pid=os.getpid(), hits=0)
+        try:
+            return command(*args, **kwargs)
+        except KeyboardInterrupt:
+            print(INTERRUPTED_LINE, file=sys.stderr, flush=True)
+            return EXIT_INTERRUPTED
+        finally:
+            signal.signal(signal.SIGINT, previous)
+    return run
