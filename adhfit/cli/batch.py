@@ -49,7 +49,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
 from ..errors import AdhfitError, InputError
-from .interrupt import EXIT_INTERRUPTED
+from .interrupt import EXIT_INTERRUPTED, on_interrupt, raising
 from .runs import RunInfo, RunLock, clear_staging, file_sha256, new_run, publish, retire, reusable_report
 from .writing import writable_folder
 
@@ -411,7 +411,9 @@ def _interrupted(index: int, job: Job, run: RunInfo) -> Outcome:
 
 def _run_jobs(jobs: list[Job], todo: list[int], args: Namespace, fit_one: Callable[[Namespace], int],
               base: str, run: RunInfo, report: Callable[[Outcome], None]) -> None:
-    """Fit the jobs ``todo`` with the runner ``args`` ask for (a Ctrl-C raises KeyboardInterrupt)."""
+    """Fit the jobs ``todo`` with the runner ``args`` ask for.  A Ctrl-C raises KeyboardInterrupt out of
+    the local and Dask runners (they stop their workers first); in this process (serial) it ends the
+    process through the finish :func:`run_batch` set (:mod:`.interrupt`)."""
     kind, how = _runner(args, len(todo))
     job_args = Namespace(**{k: v for k, v in vars(args).items() if k != "run"})  # what a worker needs
     calls = [(i, jobs[i], job_args, fit_one, base, run) for i in todo]
@@ -427,13 +429,14 @@ def _run_jobs(jobs: list[Job], todo: list[int], args: Namespace, fit_one: Callab
         out.row["run_id"] = run.run_id
         return out
     if kind == "local":
-        from .engine import start_engine  # noqa: PLC0415
-        from .engine import engine_cache_is_cold  # noqa: PLC0415
+        from .engine import engine_cache_is_cold, start_engine  # noqa: PLC0415
         if engine_cache_is_cold():  # compiled once here, with a clock, instead of in every worker at once
             start_engine("displacement", quiet=getattr(args, "quiet", False))
-        runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
-    else:
-        runners.run_dask(run_job, calls, how, report, crashed)
+    with raising():
+        if kind == "local":
+            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
+        else:
+            runners.run_dask(run_job, calls, how, report, crashed)
 
 
 def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
@@ -453,53 +456,75 @@ def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
     lock.acquire()
     try:
         clear_staging(outdir)  # what dead runs left half-written
-        return _batch(jobs, args, fit_one, outdir, run)
+        return _Batch(jobs, args, outdir, run, lock).run(fit_one)
     finally:
+        clear_staging(outdir)  # an interrupted run's half-written curves
         lock.release()
 
 
-def _batch(jobs: list[Job], args: Namespace, fit_one: Callable[[Namespace], int], outdir: Path,
-           run: RunInfo) -> int:
-    outcomes: dict[int, Outcome] = {}
-    t0 = time.perf_counter()
-    base = os.getcwd()
+class _Batch:
+    """The outcomes of one batch run as they arrive, and its conclusion (summary, last lines, status)."""
 
-    def report(out: Outcome) -> None:
-        outcomes[out.index] = out
+    def __init__(self, jobs: list[Job], args: Namespace, outdir: Path, run: RunInfo, lock: RunLock) -> None:
+        self.jobs, self.args, self.outdir, self.run_info, self.lock = jobs, args, outdir, run, lock
+        self.outcomes: dict[int, Outcome] = {}
+        self.t0 = time.perf_counter()
+
+    def report(self, out: Outcome) -> None:
+        """One curve done: remember it, and say so on standard error."""
+        self.outcomes[out.index] = out
         note = f" (resumed: reports of run {out.row.get('run_id')})" if out.resumed else ""
-        print(f"[{len(outcomes)}/{len(jobs)}] {jobs[out.index].data}{note}", file=sys.stderr, flush=True)
+        print(f"[{len(self.outcomes)}/{len(self.jobs)}] {self.jobs[out.index].data}{note}", file=sys.stderr,
+              flush=True)
         if out.output:
             print(out.output, end="", flush=True)
         if out.error is not None:
             print(f"    failed: {out.error}", file=sys.stderr, flush=True)
 
-    for out in (_resume(jobs, run, base, args) if getattr(args, "resume", False) else {}).values():
-        report(out)
-    interrupted = False
-    try:
-        _run_jobs(jobs, [i for i in range(len(jobs)) if i not in outcomes], args, fit_one, base, run, report)
-    except KeyboardInterrupt:
-        interrupted = True
-    for i, job in enumerate(jobs):
-        if i not in outcomes:
-            outcomes[i] = _interrupted(i, job, run)
-    rows = [outcomes[i].row for i in range(len(jobs))]
-    table = _write_summaries(rows, outdir)
-    if interrupted:
-        done = sum(1 for o in outcomes.values() if o.row.get("status") != INTERRUPTED)
-        print(f"adhfit: interrupted (Ctrl-C) after {done} of {len(jobs)} curves; wrote {table} and summary.html "
-              f"(the other {len(jobs) - done} listed as interrupted); --resume fits only those", file=sys.stderr,
-              flush=True)
+    def run(self, fit_one: Callable[[Namespace], int]) -> int:
+        base = os.getcwd()
+        if getattr(self.args, "resume", False):
+            for out in _resume(self.jobs, self.run_info, base, self.args).values():
+                self.report(out)
+        todo = [i for i in range(len(self.jobs)) if i not in self.outcomes]
+        try:
+            with on_interrupt(self.interrupted):
+                _run_jobs(self.jobs, todo, self.args, fit_one, base, self.run_info, self.report)
+        except KeyboardInterrupt:
+            return self.interrupted()
+        return self.finished()
+
+    def _summaries(self) -> Path:
+        for i, job in enumerate(self.jobs):
+            if i not in self.outcomes:
+                self.outcomes[i] = _interrupted(i, job, self.run_info)
+        return _write_summaries([self.outcomes[i].row for i in range(len(self.jobs))], self.outdir)
+
+    def interrupted(self) -> int:
+        """Ctrl-C: the summary of what finished, one line, :data:`EXIT_INTERRUPTED`."""
+        n = len(self.jobs)
+        done = len(self.outcomes)
+        table = self._summaries()
+        clear_staging(self.outdir)
+        self.lock.release()
+        print(f"adhfit: interrupted (Ctrl-C) after {done} of {n} curves; wrote {table} and summary.html (the "
+              f"other {n - done} listed as interrupted); --resume fits only those", file=sys.stderr, flush=True)
         return EXIT_INTERRUPTED
-    failures = [(jobs[i], outcomes[i].error) for i in range(len(jobs)) if outcomes[i].error is not None]
-    ok = len(jobs) - len(failures)
-    print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - t0:.1f} s; wrote {table} and summary.html")
-    if failures:
-        print(f"adhfit: {len(failures)} of {len(jobs)} curves failed (listed in {table}):", file=sys.stderr)
-        for job, message in failures:
-            print(f"  {job.data}: {message}", file=sys.stderr)
-        return EXIT_SOME_FAILED
-    return 0
+
+    def finished(self) -> int:
+        """Every curve done: the summary, the failures, the exit status."""
+        table = self._summaries()
+        jobs, outcomes = self.jobs, self.outcomes
+        failures = [(jobs[i], outcomes[i].error) for i in range(len(jobs)) if outcomes[i].error is not None]
+        ok = len(jobs) - len(failures)
+        print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - self.t0:.1f} s; wrote {table} and "
+              "summary.html")
+        if failures:
+            print(f"adhfit: {len(failures)} of {len(jobs)} curves failed (listed in {table}):", file=sys.stderr)
+            for job, message in failures:
+                print(f"  {job.data}: {message}", file=sys.stderr)
+            return EXIT_SOME_FAILED
+        return 0
 
 
 def _write_summaries(rows: list[dict[str, Any]], outdir: Path) -> Path:

@@ -3,13 +3,14 @@
 While a command runs, :func:`interruptible` installs a SIGINT handler that
 
 - in the process that runs the command: kills every process it started (worker processes, the MCMC
-  samplers, the figure painter, and theirs) and raises :class:`KeyboardInterrupt`, which the command
-  turns into its own one-line report (a batch writes its summary first);
+  samplers, the figure painter, and theirs), then either raises :class:`KeyboardInterrupt` (inside
+  :func:`raising`: code of the command line that stops its own workers and reports, e.g. a batch's
+  runner loop) or runs the command's *finish* (:func:`on_interrupt`; default: print
+  :data:`INTERRUPTED_LINE`) and ends the process with its status.  Library code is never unwound by a
+  Ctrl-C: a process pool's clean-up waits for ever on workers that were killed holding its locks;
 - in a process forked from it (the handler is inherited by ``fork``): exits at once and silently, since
   the terminal sends Ctrl-C to every process of the foreground group and only the parent speaks;
 - on a second Ctrl-C: exits at once.
-
-Library code never sees any of this: it only ever gets a :class:`KeyboardInterrupt`.
 """
 from __future__ import annotations
 
@@ -18,16 +19,18 @@ import os
 import signal
 import sys
 import threading
-from typing import Callable
+from contextlib import contextmanager
+from typing import Callable, Iterator
 
-__all__ = ["EXIT_INTERRUPTED", "interruptible", "descendants", "kill_descendants", "INTERRUPTED_LINE"]
+__all__ = ["EXIT_INTERRUPTED", "interruptible", "raising", "on_interrupt", "descendants", "kill_descendants",
+           "INTERRUPTED_LINE"]
 
 #: the customary status of a program stopped by SIGINT (128 + 2)
 EXIT_INTERRUPTED = 128 + signal.SIGINT
 #: what a single-curve command prints when Ctrl-C stops it
 INTERRUPTED_LINE = "adhfit: interrupted (Ctrl-C); stopped before the reports were complete"
 
-_state = {"pid": None, "hits": 0}
+_state: dict = {"pid": None, "hits": 0, "raise": False, "finish": None}
 
 
 def _children_map() -> dict[int, list[int]] | None:
@@ -83,18 +86,60 @@ def kill_descendants() -> None:
             return
 
 
+def _default_finish() -> int:
+    print(INTERRUPTED_LINE, file=sys.stderr, flush=True)
+    return EXIT_INTERRUPTED
+
+
 def _on_sigint(signum: int, frame) -> None:  # noqa: ARG001 - the signal module's signature
     if os.getpid() != _state["pid"]:
         os._exit(EXIT_INTERRUPTED)  # a forked helper: leave quietly, the parent reports
     _state["hits"] += 1
     kill_descendants()
     if _state["hits"] > 1:
-        try:
-            sys.stderr.write("adhfit: interrupted again; stopped at once\n")
-            sys.stderr.flush()
-        finally:
-            os._exit(EXIT_INTERRUPTED)
-    raise KeyboardInterrupt
+        _exit_now("adhfit: interrupted again; stopped at once", EXIT_INTERRUPTED)
+    if _state["raise"]:
+        raise KeyboardInterrupt
+    status = EXIT_INTERRUPTED
+    try:
+        status = (_state["finish"] or _default_finish)()
+    finally:
+        _exit_now(None, status)
+
+
+def _exit_now(line: str | None, status: int) -> None:
+    """Print ``line`` (if any), flush the streams and end the process without unwinding."""
+    try:
+        if line:
+            sys.stderr.write(line + "\n")
+        for stream in (sys.stdout, sys.stderr):
+            stream.flush()
+    except (OSError, ValueError, RuntimeError):  # a closed pipe, a re-entered buffer: end anyway
+        pass
+    finally:
+        os._exit(status)
+
+
+@contextmanager
+def raising() -> Iterator[None]:
+    """Within: a Ctrl-C raises :class:`KeyboardInterrupt` here (the caller handles it in its own code)."""
+    before = _state["raise"]
+    _state["raise"] = True
+    try:
+        yield
+    finally:
+        _state["raise"] = before
+
+
+@contextmanager
+def on_interrupt(finish: Callable[[], int]) -> Iterator[None]:
+    """Within: a Ctrl-C ends the process with ``finish()`` (it reports and returns the exit status)."""
+    before = _state["finish"]
+    _state["finish"] = finish
+    try:
+        yield
+    finally:
+        _state["finish"] = before
 
 
 def interruptible(command: Callable[..., int]) -> Callable[..., int]:
@@ -107,7 +152,7 @@ def interruptible(command: Callable[..., int]) -> Callable[..., int]:
         if threading.current_thread() is not threading.main_thread():
             return command(*args, **kwargs)  # signal handlers belong to the main thread
         previous = signal.signal(signal.SIGINT, _on_sigint)
-        _state.update(pid=os.getpid(), hits=0)
+        _state.update({"pid": os.getpid(), "hits": 0, "finish": None, "raise": False})
         try:
             return command(*args, **kwargs)
         except KeyboardInterrupt:
