@@ -28,7 +28,31 @@ def check_output_dir(path: Path) -> Path:
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError("-o/--output", str(path), "a folder you can write to",
                          f"{parent} is not writable; choose another folder, or change its permissions.")
+    try:
+        _probe(path)
+    except OSError as err:  # e.g. /proc or a read-only mount, which os.access does not see
+        raise InputError("-o/--output", str(path), "a folder you can write to",
+                         os_error_words(err, path) + ".") from None
     return path
+
+
+def _probe(path: Path) -> None:
+    """Create ``path`` and a file in it, then remove what was created: the folder is left as found."""
+    missing = [q for q in [path, *path.parents] if not q.exists()]
+    created = []
+    try:
+        for q in reversed(missing):
+            q.mkdir()
+            created.append(q)
+        probe = path / f".adhfit-write-test-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+    finally:
+        for q in reversed(created):
+            try:
+                q.rmdir()
+            except OSError:
+                pass
 
 
 def os_error_words(err: OSError, path: str | Path | None = None) -> str:
@@ -56,9 +80,6 @@ def writable_folder(path: str | Path) -> Path:
     path = check_output_dir(Path(path))
     try:
         path.mkdir(parents=True, exist_ok=True)
-        probe = path / f".adhfit-write-test-{os.getpid()}"
-        probe.touch()
-        probe.unlink()
     except OSError as err:
         raise InputError("-o/--output", str(path), "a folder you can write to", os_error_words(err, path) + ".") from None
     return path
