@@ -121,9 +121,10 @@ def _nearest_scene(csv_path: Path, root: Path) -> Path | None:
 
 
 def _found(folder: Path, outdir: Path | None) -> list[Path]:
-    """The curve files below ``folder``: files, and links (followed or not, they are listed)."""
+    """The curve files below ``folder``: anything but a folder (a link, a pipe: listed, and judged by
+    :func:`_problem`)."""
     return sorted(f for pattern in CURVE_PATTERNS for f in folder.rglob(pattern)
-                  if (f.is_file() or f.is_symlink()) and not _skip(f, folder, outdir))
+                  if (f.is_symlink() or not f.is_dir()) and not _skip(f, folder, outdir))
 
 
 def _problem(f: Path, root: Path | None) -> str:
@@ -229,12 +230,8 @@ def summary_row(job: Job, report: Mapping[str, Any]) -> dict[str, Any]:
 
 def failed_row(job: Job, error: BaseException | str, *, method: str = "", seed: Any = None) -> dict[str, Any]:
     """The summary.csv row of a curve that could not be fitted."""
-    import hashlib  # noqa: PLC0415
     from .. import __version__  # noqa: PLC0415
-    try:
-        sha = hashlib.sha256(Path(job.data).read_bytes()).hexdigest()
-    except OSError:
-        sha = ""
+    sha = file_sha256(job.data)  # "" for a pipe (never opened: it would wait) or an unreadable file
     if isinstance(error, (str, AdhfitError)):  # adhfit's own errors already say what and where
         message = str(error)
     else:

@@ -1,7 +1,7 @@
 """One batch run in its output folder: its id, its lock, each curve's reports put in place whole, and
 ``--resume`` (docs/contracts.md A9).
 
-- **Run id.** Every batch run has an id (``20261204T171500Z-4242``: UTC start and pid).  ``summary.csv``
+- **Run id.** Every batch run has an id (``20261204T171500Z-4242-9f3a``: UTC start, pid, a random tag).  ``summary.csv``
   names, for each curve, the run that wrote its reports (``run_id``), and each ``report.json`` a batch
   writes carries ``batch: {"run_id", "scene_sha256", "settings_sha256"}``.
 - **Lock.** ``OUTDIR/.adhfit-run.lock`` holds the pid of the run writing there.  A second run into the
@@ -64,12 +64,16 @@ def settings_sha256(args: Namespace) -> str:
 
 def new_run(outdir: Path, args: Namespace) -> RunInfo:
     """A fresh run id for ``outdir`` (absolute) and the settings of ``args``."""
+    import secrets  # noqa: PLC0415
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
-    return RunInfo(f"{now}-{os.getpid()}", Path(outdir).resolve(), settings_sha256(args))
+    # the pid and a random tag: two runs of one process in one second (Python callers) differ too
+    return RunInfo(f"{now}-{os.getpid()}-{secrets.token_hex(2)}", Path(outdir).resolve(), settings_sha256(args))
 
 
 def file_sha256(path: str | Path) -> str:
-    """SHA-256 of a file's bytes; ``""`` when it cannot be read."""
+    """SHA-256 of a regular file's bytes; ``""`` when it cannot be read (or is a pipe: never opened)."""
+    if not Path(path).is_file():
+        return ""
     digest = hashlib.sha256()
     try:
         with open(path, "rb") as fh:
