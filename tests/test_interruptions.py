@@ -80,9 +80,14 @@ def _start(args: list[str], cwd: Path) -> subprocess.Popen:
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
 
 
-def _samplers(pid: int) -> list[int]:
-    """The processes below ``pid`` that sample (forked MCMC processes), painters left out."""
-    return [p for p in descendants(pid) if "adhfit.cli fit" in _cmdline(p) and _running(p)]
+def _samplers(pid: int, depth: int = 1) -> list[int]:
+    """The forked MCMC processes ``depth`` levels below ``pid`` (1: its children; 2: its workers'
+    children), the figure painter left out."""
+    level = [pid]
+    for _ in range(depth):
+        level = [c for p in level for c in descendants(p) if _running(c) and "adhfit.cli fit" in _cmdline(c)
+                 and Path(f"/proc/{c}/stat").read_text().rsplit(")", 1)[1].split()[1] == str(p)]
+    return level
 
 
 def _stop(proc: subprocess.Popen, sig: int, *, group: bool = True) -> tuple[float, str, str]:
@@ -115,7 +120,8 @@ def test_ctrl_c_stops_a_batch_with_its_summary_and_one_line(curves, tmp_path, wo
     proc = _start(["fit", str(curves), "--method", "mcmc", "--no-plot", "--workers", str(workers), "-o", str(out)],
                   tmp_path)
     # MCMC samplers forked (by the workers, or by the parent itself when serial): fits are under way
-    _wait_for(lambda: _samplers(proc.pid), START_TIMEOUT_S, "the MCMC samplers to start", proc)
+    _wait_for(lambda: _samplers(proc.pid, depth=1 if workers == 1 else 2), START_TIMEOUT_S,
+              "the MCMC samplers to start", proc)
     if workers == 2:  # a second run into the same folder meanwhile is refused in words, and writes nothing
         assert main(["fit", str(curves), *FAST, "-o", str(out)]) == 2
         err = capsys.readouterr().err
@@ -158,7 +164,7 @@ def test_ctrl_c_in_one_mcmc_fit_is_one_line(tmp_path):
 def test_workers_die_with_a_killed_parent(curves, tmp_path):
     out = tmp_path / "fits"
     proc = _start(["fit", str(curves), "--method", "mcmc", "--no-plot", "--workers", "2", "-o", str(out)], tmp_path)
-    _wait_for(lambda: _samplers(proc.pid), START_TIMEOUT_S, "the MCMC samplers to start", proc)
+    _wait_for(lambda: _samplers(proc.pid, depth=2), START_TIMEOUT_S, "the MCMC samplers to start", proc)
     tree = descendants(proc.pid)
     assert len(tree) >= 3  # two workers and what they started
     _stop(proc, signal.SIGKILL, group=False)  # the parent only: nothing of it can clean up

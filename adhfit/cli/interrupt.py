@@ -2,11 +2,11 @@
 
 While a command runs, :func:`interruptible` installs a SIGINT handler that
 
-- in the process that runs the command: kills every process it started (worker processes, the MCMC
-  samplers, the figure painter, and theirs), then either raises :class:`KeyboardInterrupt` (inside
+- in the process that runs the command: either kills every process it started (worker processes, the
+  MCMC samplers, the figure painter, and theirs) and raises :class:`KeyboardInterrupt` (inside
   :func:`raising`: code of the command line that stops its own workers and reports, e.g. a batch's
-  runner loop) or runs the command's *finish* (:func:`on_interrupt`; default: print
-  :data:`INTERRUPTED_LINE`) and ends the process with its status.  Library code is never unwound by a
+  runner loop), or runs the command's *finish* (:func:`on_interrupt`; default: print
+  :data:`INTERRUPTED_LINE`), kills every process it started and ends the process with its status.  Library code is never unwound by a
   Ctrl-C: a process pool's clean-up waits for ever on workers that were killed holding its locks;
 - in a process forked from it (the handler is inherited by ``fork``): exits at once and silently, since
   the terminal sends Ctrl-C to every process of the foreground group and only the parent speaks;
@@ -19,6 +19,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from contextlib import contextmanager
 from typing import Callable, Iterator
 
@@ -30,7 +31,7 @@ EXIT_INTERRUPTED = 128 + signal.SIGINT
 #: what a single-curve command prints when Ctrl-C stops it
 INTERRUPTED_LINE = "adhfit: interrupted (Ctrl-C); stopped before the reports were complete"
 
-_state: dict = {"pid": None, "hits": 0, "raise": False, "finish": None}
+_state: dict = {"pid": None, "hits": 0, "raise": False, "finish": None, "stopping": False}
 
 
 def _children_map() -> dict[int, list[int]] | None:
@@ -74,8 +75,8 @@ def descendants(pid: int | None = None) -> list[int]:
 
 
 def kill_descendants() -> None:
-    """SIGKILL every process below this one (twice over: a child may have forked while we looked)."""
-    for _ in range(2):
+    """SIGKILL every process below this one, again until none is left (a child may fork while we look)."""
+    for _ in range(5):
         pids = descendants()
         for pid in pids:
             try:
@@ -84,6 +85,16 @@ def kill_descendants() -> None:
                 pass
         if not pids:
             return
+        time.sleep(0.01)
+
+
+def _no_child_after_ctrl_c() -> None:
+    """Registered to run in every forked child: a process forked after Ctrl-C was pressed (a process
+    pool replacing a worker that died) ends at once, so that none escapes the kill and outlives this
+    process holding its output pipes open.  (Blocking the fork instead would deadlock: other fork
+    hooks, logging's, take locks first.)"""
+    if _state["stopping"]:
+        os._exit(EXIT_INTERRUPTED)
 
 
 def _default_finish() -> int:
@@ -95,20 +106,28 @@ def _on_sigint(signum: int, frame) -> None:  # noqa: ARG001 - the signal module'
     if os.getpid() != _state["pid"]:
         os._exit(EXIT_INTERRUPTED)  # a forked helper: leave quietly, the parent reports
     _state["hits"] += 1
-    kill_descendants()
+    _state["stopping"] = True
     if _state["hits"] > 1:
         _exit_now("adhfit: interrupted again; stopped at once", EXIT_INTERRUPTED)
     if _state["raise"]:
+        kill_descendants()
         raise KeyboardInterrupt
-    status = EXIT_INTERRUPTED
+    status, line = EXIT_INTERRUPTED, None
     try:
         status = (_state["finish"] or _default_finish)()
+    except BaseException as err:  # noqa: BLE001 - the process ends here; say why in one line
+        line = f"adhfit: interrupted (Ctrl-C); what finished could not be written ({type(err).__name__}: {err})"
     finally:
-        _exit_now(None, status)
+        _exit_now(line, status)
 
 
 def _exit_now(line: str | None, status: int) -> None:
-    """Print ``line`` (if any), flush the streams and end the process without unwinding."""
+    """Print ``line`` (if any), kill every process below this one and end without unwinding.
+
+    The kill comes last: a process pool replaces a worker that died (a Ctrl-C from the terminal
+    reaches its workers too) within a tenth of a second, and a replacement forked after the kill
+    would outlive this process, holding its output pipes open.
+    """
     try:
         if line:
             sys.stderr.write(line + "\n")
@@ -117,6 +136,7 @@ def _exit_now(line: str | None, status: int) -> None:
     except (OSError, ValueError, RuntimeError):  # a closed pipe, a re-entered buffer: end anyway
         pass
     finally:
+        kill_descendants()
         os._exit(status)
 
 
@@ -151,8 +171,11 @@ def interruptible(command: Callable[..., int]) -> Callable[..., int]:
     def run(*args, **kwargs) -> int:
         if threading.current_thread() is not threading.main_thread():
             return command(*args, **kwargs)  # signal handlers belong to the main thread
+        _state.update({"pid": os.getpid(), "hits": 0, "finish": None, "raise": False, "stopping": False})
+        if not _state.get("hooked") and hasattr(os, "register_at_fork"):
+            os.register_at_fork(after_in_child=_no_child_after_ctrl_c)
+            _state["hooked"] = True
         previous = signal.signal(signal.SIGINT, _on_sigint)
-        _state.update({"pid": os.getpid(), "hits": 0, "finish": None, "raise": False})
         try:
             return command(*args, **kwargs)
         except KeyboardInterrupt:
