@@ -119,7 +119,7 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
                         "tcp://10.0.0.5:8786 (pip install 'adhfit[dask]'; files on a shared disk)")
     p.add_argument("--resume", action="store_true",
                    help="batch: keep the reports of curves an earlier batch into the same -o already fitted from "
-                        "the same file, scene and settings; fit only the others (docs/contracts.md A9)")
+                        "the same file, scene and settings; fit only the others (docs/contracts.md A7b)")
     p.add_argument("--global", dest="global_fit", action="store_true",
                    help="several curves of one membrane and substrate: one W_ad, one mu*h and one slip condition, "
                         "offsets per curve (the load-cell zero always fitted), each curve its own scene (docs/contracts.md A7)")

@@ -3,7 +3,9 @@
 Which files
     Every argument is a curve file or a folder.  A folder stands for every ``*.csv``, ``*.tsv`` and
     LabVIEW ``*.lvm`` file below it
-    (recursively, sorted; hidden files and folders and the output directory are skipped).  The run is a
+    (recursively, sorted; hidden files and folders and the output directory are skipped).  A file
+    there that cannot be fitted (unreadable, a pipe, a broken link, a link pointing outside the folder)
+    is a failed row that says why.  The run is a
     *batch* when there are several files or any folder; a single file is an ordinary fit.
 
 Which scene (when ``--scene`` is not given)
@@ -26,10 +28,17 @@ Who runs the curves
     (only ``wall_time_s``, a measurement, changes from run to run).  One failing curve never stops the
     others, nor does a worker process that dies.
 
+Interruptions and re-runs (docs/contracts.md A7b, :mod:`.runs`, :mod:`.interrupt`)
+    A Ctrl-C writes the summary of what finished (the rest ``interrupted``) and ends with status 130;
+    each curve's reports are moved into its folder whole; a curve that fails loses its older reports;
+    the output folder is locked for the run; ``--resume`` keeps the reports of curves already fitted
+    from the same bytes, scene and settings.
+
 Exit status
     0 when every curve was fitted; 1 when at least one failed (the table lists it with its error, the
     other curves' reports are written, and standard error ends with the list of failures); 2 for
-    invalid command-line input (nothing found to fit, unreadable ``--scene``).
+    invalid command-line input (nothing found to fit, unreadable ``--scene``, an output folder that
+    cannot be written or that another run is writing to); 130 after a Ctrl-C.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Ctrl-C on the command line: one line, exit status 130, no process left behind (docs/contracts.md A9).
+"""Ctrl-C on the command line: one line, exit status 130, no process left behind (docs/contracts.md A7b).
 
 While a command runs, :func:`interruptible` installs a SIGINT handler that
 

@@ -6,7 +6,7 @@ handed to ``report`` as they finish; the caller puts them back in job order.  A 
 (a crash, not an error) or whose task is lost is handed to ``crashed(index, message)`` instead, and the
 other jobs go on.
 
-Stopping (docs/contracts.md A9).  A :class:`KeyboardInterrupt` in the caller (Ctrl-C) cancels the
+Stopping (docs/contracts.md A7b).  A :class:`KeyboardInterrupt` in the caller (Ctrl-C) cancels the
 queued jobs, kills the running ones and is raised again at once; the results reported before it stand.
 A local worker process leads its own process group (so that the terminal's Ctrl-C reaches only the
 parent, which decides) and dies, with every process it started, when its parent dies, however it dies

@@ -1,5 +1,5 @@
 """One batch run in its output folder: its id, its lock, each curve's reports put in place whole, and
-``--resume`` (docs/contracts.md A9).
+``--resume`` (docs/contracts.md A7b).
 
 - **Run id.** Every batch run has an id (``20261204T171500Z-4242-9f3a``: UTC start, pid, a random tag).  ``summary.csv``
   names, for each curve, the run that wrote its reports (``run_id``), and each ``report.json`` a batch
@@ -191,6 +191,7 @@ def publish(stage: Path, dest: Path, batch: dict[str, Any]) -> None:
     """Move a finished fit's files from ``stage`` into ``dest``, ``report.json`` last (with ``batch``
     added), and remove report files an older run left there that this one did not write."""
     dest.mkdir(parents=True, exist_ok=True)
+    _name_the_destination(stage, dest)
     report = stage / "report.json"
     d = json.loads(report.read_text(encoding="utf-8"))
     d["batch"] = batch
@@ -208,6 +209,19 @@ def publish(stage: Path, dest: Path, batch: dict[str, Any]) -> None:
             _unlink(dest / name)
     os.replace(report, dest / "report.json")
     shutil.rmtree(stage, ignore_errors=True)
+
+
+def _name_the_destination(stage: Path, dest: Path) -> None:
+    """Reports that name a file of their own folder (an MCMC fit's ``chain.h5``) name it where it will be."""
+    import html  # noqa: PLC0415
+    for name, quote in (("report.json", lambda t: json.dumps(t)[1:-1]), ("report.md", str), ("report.html", html.escape)):
+        path = stage / name
+        if not path.is_file():
+            continue
+        text = path.read_text(encoding="utf-8")
+        old, new = quote(str(stage)), quote(str(dest))
+        if old in text:
+            path.write_text(text.replace(old, new), encoding="utf-8")
 
 
 def retire(dest: Path) -> None:
