@@ -223,8 +223,9 @@ def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace]
     with _ONE_AT_A_TIME:
         stage = None if run is None else run.stage(index)
         try:
-            if stage is not None:
+            if stage is not None:  # made here: the fit's own check of its folder then creates nothing
                 shutil.rmtree(stage, ignore_errors=True)
+                stage.mkdir(parents=True)
             _fit_into(here.out if stage is None else stage, here, args, fit_one, buf)
             if stage is not None:
                 publish(stage, here.out, {"run_id": run.run_id, "scene_sha256": file_sha256(here.scene),

@@ -42,7 +42,10 @@ def _probe(path: Path) -> None:
     created = []
     try:
         for q in reversed(missing):
-            q.mkdir()
+            try:
+                q.mkdir()
+            except FileExistsError:  # made by another process meanwhile: not ours to remove
+                continue
             created.append(q)
         probe = path / f".adhfit-write-test-{os.getpid()}"
         probe.touch()
