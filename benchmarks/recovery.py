@@ -142,7 +142,7 @@ def _execute(args) -> tuple[list[dict], float]:
     """Run the plan with the runners of ``adhfit fit`` batches (serial, ``--workers`` local processes or
     the Dask cluster at ``--scheduler``); every record is also appended to OUT.partial.jsonl as it
     completes.  The records come back in plan order whoever ran them."""
-    from adhfit.fitting import runners  # noqa: PLC0415
+    from adhfit.cli import runners  # noqa: PLC0415
     jobs = plan(args)
     t0 = time.perf_counter()
     done: dict[int, dict] = {}

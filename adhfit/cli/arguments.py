@@ -115,6 +115,9 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="batch: fit the curves on the Dask distributed cluster at ADDRESS, e.g. "
                         "tcp://10.0.0.5:8786 (pip install 'adhfit[dask]'; files on a shared disk)")
+    p.add_argument("--resume", action="store_true",
+                   help="batch: keep the reports of curves an earlier batch into the same -o already fitted from "
+                        "the same file, scene and settings; fit only the others (docs/contracts.md A7b)")
     p.add_argument("--global", dest="global_fit", action="store_true",
                    help="several curves of one membrane and substrate: one W_ad, one mu*h and one slip condition, "
                         "offsets per curve, each curve its own scene (docs/contracts.md A7)")

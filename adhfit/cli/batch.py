@@ -1,9 +1,11 @@
 """``adhfit fit`` over several curves: one summary table, and a bad file never stops the run.
 
-Which files
+Which files (:mod:`.discovery`)
     Every argument is a curve file or a folder.  A folder stands for every ``*.csv``, ``*.tsv`` and
     LabVIEW ``*.lvm`` file below it
-    (recursively, sorted; hidden files and folders and the output directory are skipped).  The run is a
+    (recursively, sorted; hidden files and folders and the output directory are skipped).  A file
+    there that cannot be fitted (unreadable, a pipe, a broken link, a link pointing outside the folder)
+    is a failed row that says why.  The run is a
     *batch* when there are several files or any folder; a single file is an ordinary fit.
 
 Which scene (when ``--scene`` is not given)
@@ -26,10 +28,17 @@ Who runs the curves
     (only ``wall_time_s``, a measurement, changes from run to run).  One failing curve never stops the
     others, nor does a worker process that dies.
 
+Interruptions and re-runs (docs/contracts.md A7b, :mod:`.runs`, :mod:`.interrupt`)
+    A Ctrl-C writes the summary of what finished (the rest ``interrupted``) and ends with status 130;
+    each curve's reports are moved into its folder whole; a curve that fails loses its older reports;
+    the output folder is locked for the run; ``--resume`` keeps the reports of curves already fitted
+    from the same bytes, scene and settings.
+
 Exit status
     0 when every curve was fitted; 1 when at least one failed (the table lists it with its error, the
     other curves' reports are written, and standard error ends with the list of failures); 2 for
-    invalid command-line input (nothing found to fit, unreadable ``--scene``).
+    invalid command-line input (nothing found to fit, unreadable ``--scene``, an output folder that
+    cannot be written or that another run is writing to); 130 after a Ctrl-C.
 """
 from __future__ import annotations
 
@@ -39,15 +48,20 @@ import dataclasses
 import io
 import json
 import os
+import shutil
 import sys
 import threading
 import time
 from argparse import Namespace
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any, Callable, Mapping
 
 from ..errors import AdhfitError, InputError
+from .discovery import CURVE_PATTERNS, SCENE_NAME, Job, discover, is_batch, single_scene  # noqa: F401
+from .interrupt import EXIT_INTERRUPTED, on_interrupt, raising
+from .runs import RunInfo, RunLock, clear_staging, file_sha256, new_run, publish, retire, reusable_report
+from .writing import writable_folder
 
 #: modules a local worker needs, imported once by a fork server (where the workers are not forked from
 #: this process)
@@ -55,113 +69,20 @@ PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.stage", "adhfit.data", "adhfit.scen
            "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot", "matplotlib")
 
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
-           "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED"]
+           "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED",
+           "EXIT_INTERRUPTED", "INTERRUPTED"]
 
-SCENE_NAME = "scene.toml"
 EXIT_SOME_FAILED = 1
+#: the status of a curve a Ctrl-C left unfinished
+INTERRUPTED = "interrupted"
 _PARAMS = ("work_of_adhesion", "mu_h")
-#: the files a folder stands for: text exports (LabVIEW included); a folder of other .txt files is common
-CURVE_PATTERNS = ("*.csv", "*.tsv", "*.lvm")
 
 #: summary.csv columns, in order
 COLUMNS = (["file", "status", "error"]
            + [f"{p}{s}" for p in _PARAMS for s in ("", "_stderr", "_ci95_low", "_ci95_high")]
            + ["slip_selected", "slip_verdict", "slip_reported", "delta_bic", "redchi", "n_warnings", "warnings",
-              "report_dir", "scene", "sha256", "adhfit_version", "method", "seed", "wall_time_s"])
+              "report_dir", "scene", "sha256", "adhfit_version", "method", "seed", "wall_time_s", "run_id"])
 
-
-@dataclass(frozen=True)
-class Job:
-    """One curve of a batch: the data file, its scene (None: not found) and its output folder."""
-
-    data: Path
-    scene: Path | None
-    out: Path
-    scene_note: str = ""
-
-
-def is_batch(data: Iterable[Path]) -> bool:
-    """True for several arguments or any folder."""
-    data = list(data)
-    return len(data) != 1 or Path(data[0]).is_dir()
-
-
-def _skip(path: Path, root: Path, outdir: Path | None) -> bool:
-    rel = path.relative_to(root).parts
-    if any(part.startswith(".") for part in rel):
-        return True
-    if outdir is not None:
-        try:
-            path.resolve().relative_to(outdir.resolve())
-            return True
-        except ValueError:
-            pass
-    return False
-
-
-def _nearest_scene(csv_path: Path, root: Path) -> Path | None:
-    folder = csv_path.parent
-    root = root.resolve()
-    while True:
-        candidate = folder / SCENE_NAME
-        if candidate.is_file():
-            return candidate
-        if folder.resolve() == root or folder.resolve() == folder.resolve().parent:
-            return None
-        folder = folder.parent
-
-
-def discover(paths: Iterable[str | Path], *, scene: str | Path | None = None,
-             outdir: str | Path | None = None) -> list[Job]:
-    """The curves to fit, each with its scene and output folder (rules in the module docstring).
-
-    Raises
-    ------
-    InputError
-        A path that does not exist, or no CSV file at all.
-    """
-    found: list[tuple[Path, Path]] = []  # (csv, the root it was found under)
-    outdir = None if outdir is None else Path(outdir)
-    for raw in paths:
-        p = Path(raw)
-        if p.is_dir():
-            files = sorted(f for pattern in CURVE_PATTERNS for f in p.rglob(pattern)
-                           if f.is_file() and not _skip(f, p, outdir))
-            found += [(f, p) for f in files]
-        elif p.is_file():
-            found.append((p, p.parent))
-        else:
-            raise InputError("DATA", str(p), "an existing CSV file or folder")
-    if not found:
-        raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one *.csv, *.tsv or *.lvm file")
-    seen, unique = set(), []
-    for f, root in found:
-        key = f.resolve()
-        if key not in seen:
-            seen.add(key)
-            unique.append((f, root))
-    base = Path(os.path.commonpath([str(r.resolve()) for _, r in unique]))
-    out = Path(outdir) if outdir is not None else Path("adhfit_fit")
-    jobs = []
-    for f, root in unique:
-        rel = f.resolve().relative_to(base).with_suffix("")
-        if scene is not None:
-            sc, note = Path(scene), "--scene"
-        else:
-            sc = _nearest_scene(f, root)
-            note = "nearest scene.toml" if sc else (f"no {SCENE_NAME} next to the file or in a parent folder "
-                                                     f"up to {root}; give --scene")
-        jobs.append(Job(data=f, scene=sc, out=out / rel, scene_note=note))
-    return jobs
-
-
-def single_scene(data: str | Path) -> Path:
-    """The scene of a single-curve fit without ``--scene``: ``scene.toml`` next to the data file."""
-    candidate = Path(data).parent / SCENE_NAME
-    if not candidate.is_file():
-        raise InputError("--scene", None, f"a scene file: give --scene SCENE.toml or put {SCENE_NAME} next to "
-                                          f"{data}")
-    return candidate
 
 
 def _ci(e: Mapping[str, Any]) -> tuple[Any, Any]:
@@ -194,12 +115,8 @@ def summary_row(job: Job, report: Mapping[str, Any]) -> dict[str, Any]:
 
 def failed_row(job: Job, error: BaseException | str, *, method: str = "", seed: Any = None) -> dict[str, Any]:
     """The summary.csv row of a curve that could not be fitted."""
-    import hashlib  # noqa: PLC0415
     from .. import __version__  # noqa: PLC0415
-    try:
-        sha = hashlib.sha256(Path(job.data).read_bytes()).hexdigest()
-    except OSError:
-        sha = ""
+    sha = file_sha256(job.data)  # "" for a pipe (never opened: it would wait) or an unreadable file
     if isinstance(error, (str, AdhfitError)):  # adhfit's own errors already say what and where
         message = str(error)
     else:
@@ -218,14 +135,20 @@ def _cell(v: Any) -> Any:
 
 
 def write_summary(rows: list[Mapping[str, Any]], path: str | Path) -> Path:
-    """Write summary.csv (:data:`COLUMNS`; empty cells where a value is missing)."""
+    """Write summary.csv (:data:`COLUMNS`; empty cells where a value is missing), atomically: a reader
+    sees the old table or the new one, never half of one."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=COLUMNS, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: _cell(r.get(k)) for k in COLUMNS})
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with tmp.open("w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=COLUMNS, extrasaction="ignore")
+            w.writeheader()
+            for r in rows:
+                w.writerow({k: _cell(r.get(k)) for k in COLUMNS})
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
 
 
@@ -244,6 +167,8 @@ class Outcome:
     row: dict[str, Any]
     output: str = ""
     error: str | None = None
+    #: re-used from an earlier run's reports (``--resume``), not fitted now
+    resumed: bool = False
 
 
 #: one fit at a time per process: a Dask worker may run tasks in threads, and a fit redirects standard
@@ -266,34 +191,63 @@ def _failed(index: int, job: Job, base: str, error: BaseException | str, args: N
     return Outcome(index, row, output, row["error"])
 
 
-def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace], int], base: str) -> Outcome:
+def _fit_into(folder: Path, here: Job, args: Namespace, fit_one: Callable[[Namespace], int],
+              buf: io.StringIO) -> None:
+    """The single-curve fit of ``here`` with its reports (and the thumbnail) written into ``folder``."""
+    if here.problem:
+        raise InputError("DATA", str(here.data), "a readable curve file", here.problem)
+    if here.scene is None:
+        raise InputError("scene", None, f"a scene file ({here.scene_note})")
+    # one curve per process at a time: every core already fits, so no second process draws
+    one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": folder, "painter": False})
+    with contextlib.redirect_stdout(buf):
+        status = fit_one(one)
+    if status != 0:
+        raise RuntimeError(f"the fit ended with exit status {status}")
+    if not getattr(args, "no_plot", False):  # summary.html's small figure, drawn here on every core
+        from ..report.thumbnails import write_thumbnail  # noqa: PLC0415
+        write_thumbnail(folder)
+
+
+def run_job(index: int, job: Job, args: Namespace, fit_one: Callable[[Namespace], int], base: str,
+            run: RunInfo | None = None) -> Outcome:
     """Fit one curve of a batch, in whichever process runs it; never raises for a bad curve.
 
     Paths are resolved against ``base`` (the working folder of the process that made the jobs); the
-    summary row keeps them as given, so it does not depend on where the job ran.
+    summary row keeps them as given, so it does not depend on where the job ran.  With ``run`` (a batch
+    run, :mod:`.runs`), the reports are written into a staging folder and moved into the curve's folder
+    only when complete; a failure removes the curve's older reports.
     """
     here = _absolute(job, base)
     buf = io.StringIO()
     with _ONE_AT_A_TIME:
+        stage = None if run is None else run.stage(index)
         try:
-            if job.scene is None:
-                raise InputError("scene", None, f"a scene file ({job.scene_note})")
-            # one curve per process at a time: every core already fits, so no second process draws
-            one = Namespace(**{**vars(args), "data": here.data, "scene": here.scene, "output": here.out,
-                               "painter": False})
-            with contextlib.redirect_stdout(buf):
-                status = fit_one(one)
-            if status != 0:
-                raise RuntimeError(f"the fit ended with exit status {status}")
+            if stage is not None:  # made here: the fit's own check of its folder then creates nothing
+                shutil.rmtree(stage, ignore_errors=True)
+                stage.mkdir(parents=True)
+            _fit_into(here.out if stage is None else stage, here, args, fit_one, buf)
+            if stage is not None:
+                publish(stage, here.out, {"run_id": run.run_id, "scene_sha256": file_sha256(here.scene),
+                                          "settings_sha256": run.settings_sha256})
             report = json.loads((here.out / "report.json").read_text(encoding="utf-8"))
-            if not getattr(args, "no_plot", False):  # summary.html's small figure, drawn here on every core
-                from ..report.thumbnails import write_thumbnail  # noqa: PLC0415
-                write_thumbnail(here.out)
-            return Outcome(index, summary_row(job, report), buf.getvalue())
+            row = {**summary_row(job, report), "run_id": "" if run is None else run.run_id}
+            return Outcome(index, row, _printed(buf, stage, here.out))
         except KeyboardInterrupt:
             raise
         except Exception as err:  # noqa: BLE001 - one bad curve must not stop the batch; it is listed
-            return _failed(index, job, base, err, args, buf.getvalue())
+            if stage is not None:
+                shutil.rmtree(stage, ignore_errors=True)
+                retire(here.out)  # an older report must not pass for this run's
+            out = _failed(index, job, base, err, args, _printed(buf, stage, here.out))
+            out.row["run_id"] = "" if run is None else run.run_id
+            return out
+
+
+def _printed(buf: io.StringIO, stage: Path | None, dest: Path) -> str:
+    """What the fit printed, naming the curve's folder rather than the staging one."""
+    text = buf.getvalue()
+    return text if stage is None else text.replace(str(stage), str(dest))
 
 
 def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
@@ -301,7 +255,7 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
 
     ``args.workers`` is ``None`` for one process per core; a Namespace without it runs in this process.
     """
-    from ..fitting.runners import default_workers  # noqa: PLC0415
+    from .runners import default_workers  # noqa: PLC0415
     address = getattr(args, "scheduler", None)
     workers = getattr(args, "workers", 1)
     if address is not None:
@@ -315,51 +269,150 @@ def _runner(args: Namespace, n_jobs: int) -> tuple[str, Any]:
     return ("serial", None) if workers == 1 or n_jobs == 1 else ("local", workers)
 
 
+def _resume(jobs: list[Job], run: RunInfo, base: str, args: Namespace) -> dict[int, Outcome]:
+    """``--resume``: the curves whose reports a batch wrote from the same bytes, scene and settings."""
+    found = {}
+    for i, job in enumerate(jobs):
+        here = _absolute(job, base)
+        if job.problem or here.scene is None:
+            continue
+        report = reusable_report(here.out, file_sha256(here.data), file_sha256(here.scene), run.settings_sha256)
+        if report is not None:
+            row = {**summary_row(job, report), "run_id": report["batch"].get("run_id", "")}
+            found[i] = Outcome(i, row, "", None, resumed=True)
+    return found
+
+
+def _interrupted(index: int, job: Job, run: RunInfo) -> Outcome:
+    """The row of a curve a Ctrl-C left unfinished (running or queued)."""
+    row = {"file": str(job.data), "status": INTERRUPTED, "report_dir": str(job.out),
+           "scene": "" if job.scene is None else str(job.scene), "run_id": run.run_id,
+           "error": "not fitted: the batch was interrupted (Ctrl-C) before this curve finished; "
+                    "re-run with --resume to fit only the curves left"}
+    return Outcome(index, row, "", row["error"])
+
+
+def _run_jobs(jobs: list[Job], todo: list[int], args: Namespace, fit_one: Callable[[Namespace], int],
+              base: str, run: RunInfo, report: Callable[[Outcome], None]) -> None:
+    """Fit the jobs ``todo`` with the runner ``args`` ask for.  A Ctrl-C raises KeyboardInterrupt out of
+    the local and Dask runners (they stop their workers first); in this process (serial) it ends the
+    process through the finish :func:`run_batch` set (:mod:`.interrupt`)."""
+    kind, how = _runner(args, len(todo))
+    job_args = Namespace(**{k: v for k, v in vars(args).items() if k != "run"})  # what a worker needs
+    calls = [(i, jobs[i], job_args, fit_one, base, run) for i in todo]
+    if kind == "serial":
+        for call in calls:
+            report(run_job(*call))
+        return
+    from . import runners  # noqa: PLC0415
+
+    def crashed(pos: int, message: str) -> Outcome:
+        i = calls[pos][0]
+        out = _failed(i, jobs[i], base, message, args)
+        out.row["run_id"] = run.run_id
+        return out
+    if kind == "local":
+        from .engine import engine_cache_is_cold, start_engine  # noqa: PLC0415
+        if engine_cache_is_cold():  # compiled once here, with a clock, instead of in every worker at once
+            start_engine("displacement", quiet=getattr(args, "quiet", False))
+    with raising():
+        if kind == "local":
+            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
+        else:
+            runners.run_dask(run_job, calls, how, report, crashed)
+
+
 def run_batch(args: Namespace, fit_one: Callable[[Namespace], int]) -> int:
     """Fit every curve of ``args.data`` with ``fit_one`` (the single-curve ``adhfit fit``); returns the exit
     status.  ``args.workers`` local processes (``None``: one per core; absent: this process) or the Dask
     scheduler at ``args.scheduler`` run the curves; the summary is the same whichever does.  Prints one
-    line per curve as it finishes and, at the end, the failures, on standard error."""
+    line per curve as it finishes and, at the end, the failures, on standard error.  The output folder is
+    locked for the run, and a Ctrl-C ends it with the summary of what finished (:mod:`.runs`)."""
     data = [Path(p) for p in args.data]
-    outdir = args.output if args.output is not None else _default_outdir(data)
+    outdir = Path(args.output if args.output is not None else _default_outdir(data))
     if args.scene is not None and not Path(args.scene).is_file():
         raise InputError("--scene", str(args.scene), "an existing scene file (TOML)")
     jobs = discover(data, scene=args.scene, outdir=outdir)
-    kind, how = _runner(args, len(jobs))
-    outcomes: dict[int, Outcome] = {}
-    t0 = time.perf_counter()
-    base = os.getcwd()
+    _runner(args, len(jobs))  # invalid --workers / --scheduler: said before anything is written
+    run = new_run(outdir, args)
+    lock = RunLock(writable_folder(outdir), run.run_id)
+    lock.acquire()
+    try:
+        clear_staging(outdir)  # what dead runs left half-written
+        return _Batch(jobs, args, outdir, run, lock).run(fit_one)
+    finally:
+        clear_staging(outdir)  # an interrupted run's half-written curves
+        lock.release()
 
-    def report(out: Outcome) -> None:
-        outcomes[out.index] = out
-        print(f"[{len(outcomes)}/{len(jobs)}] {jobs[out.index].data}", file=sys.stderr, flush=True)
+
+class _Batch:
+    """The outcomes of one batch run as they arrive, and its conclusion (summary, last lines, status)."""
+
+    def __init__(self, jobs: list[Job], args: Namespace, outdir: Path, run: RunInfo, lock: RunLock) -> None:
+        self.jobs, self.args, self.outdir, self.run_info, self.lock = jobs, args, outdir, run, lock
+        self.outcomes: dict[int, Outcome] = {}
+        self.t0 = time.perf_counter()
+
+    def report(self, out: Outcome) -> None:
+        """One curve done: remember it, and say so on standard error."""
+        self.outcomes[out.index] = out
+        note = f" (resumed: reports of run {out.row.get('run_id')})" if out.resumed else ""
+        print(f"[{len(self.outcomes)}/{len(self.jobs)}] {self.jobs[out.index].data}{note}", file=sys.stderr,
+              flush=True)
         if out.output:
             print(out.output, end="", flush=True)
         if out.error is not None:
             print(f"    failed: {out.error}", file=sys.stderr, flush=True)
 
-    calls = [(i, job, args, fit_one, base) for i, job in enumerate(jobs)]
-    if kind == "serial":
-        for call in calls:
-            report(run_job(*call))
-    else:
-        from ..fitting import runners  # noqa: PLC0415
-        def crashed(i: int, message: str) -> Outcome:
-            return _failed(i, jobs[i], base, message, args)
-        if kind == "local":
-            runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
-        else:
-            runners.run_dask(run_job, calls, how, report, crashed)
-    rows = [outcomes[i].row for i in range(len(jobs))]
-    failures = [(jobs[i], outcomes[i].error) for i in range(len(jobs)) if outcomes[i].error is not None]
-    table = write_summary(rows, Path(outdir) / "summary.csv")
+    def run(self, fit_one: Callable[[Namespace], int]) -> int:
+        base = os.getcwd()
+        if getattr(self.args, "resume", False):
+            for out in _resume(self.jobs, self.run_info, base, self.args).values():
+                self.report(out)
+        todo = [i for i in range(len(self.jobs)) if i not in self.outcomes]
+        try:
+            with on_interrupt(self.interrupted):
+                _run_jobs(self.jobs, todo, self.args, fit_one, base, self.run_info, self.report)
+        except KeyboardInterrupt:
+            return self.interrupted()
+        return self.finished()
+
+    def _summaries(self) -> Path:
+        for i, job in enumerate(self.jobs):
+            if i not in self.outcomes:
+                self.outcomes[i] = _interrupted(i, job, self.run_info)
+        return _write_summaries([self.outcomes[i].row for i in range(len(self.jobs))], self.outdir)
+
+    def interrupted(self) -> int:
+        """Ctrl-C: the summary of what finished, one line, :data:`EXIT_INTERRUPTED`."""
+        n = len(self.jobs)
+        done = len(self.outcomes)
+        table = self._summaries()
+        clear_staging(self.outdir)
+        self.lock.release()
+        print(f"adhfit: interrupted (Ctrl-C) after {done} of {n} curves; wrote {table} and summary.html (the "
+              f"other {n - done} listed as interrupted); --resume fits only those", file=sys.stderr, flush=True)
+        return EXIT_INTERRUPTED
+
+    def finished(self) -> int:
+        """Every curve done: the summary, the failures, the exit status."""
+        table = self._summaries()
+        jobs, outcomes = self.jobs, self.outcomes
+        failures = [(jobs[i], outcomes[i].error) for i in range(len(jobs)) if outcomes[i].error is not None]
+        ok = len(jobs) - len(failures)
+        print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - self.t0:.1f} s; wrote {table} and "
+              "summary.html")
+        if failures:
+            print(f"adhfit: {len(failures)} of {len(jobs)} curves failed (listed in {table}):", file=sys.stderr)
+            for job, message in failures:
+                print(f"  {job.data}: {message}", file=sys.stderr)
+            return EXIT_SOME_FAILED
+        return 0
+
+
+def _write_summaries(rows: list[dict[str, Any]], outdir: Path) -> Path:
+    """summary.csv, and summary.html linking only the reports this summary vouches for (status ok)."""
+    table = write_summary(rows, outdir / "summary.csv")
     from ..report.summary_html import write_summary_html  # noqa: PLC0415 - a page to look at, next to the table
-    write_summary_html(rows, Path(outdir))
-    ok = len(jobs) - len(failures)
-    print(f"{ok} of {len(jobs)} curves fitted in {time.perf_counter() - t0:.1f} s; wrote {table} and summary.html")
-    if failures:
-        print(f"adhfit: {len(failures)} of {len(jobs)} curves failed (listed in {table}):", file=sys.stderr)
-        for job, message in failures:
-            print(f"  {job.data}: {message}", file=sys.stderr)
-        return EXIT_SOME_FAILED
-    return 0
+    write_summary_html([r if r.get("status") == "ok" else {**r, "report_dir": ""} for r in rows], outdir)
+    return table

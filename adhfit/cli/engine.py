@@ -1,8 +1,9 @@
 """The command line's first minute: is the compiled engine cached, and load it before the real work.
 
 The numba kernels of :mod:`adhfit.core` are compiled on the first call in a new environment
-(about a minute, longer on a busy machine) and loaded from numba's on-disk cache afterwards (about a
-second).  The CLI uses :func:`engine_cache_is_cold` to print a one-line notice before a cold start, and
+(about a minute on an idle 2-core machine, several on a busy one) and loaded from numba's on-disk cache afterwards (about a
+second).  The CLI uses :func:`engine_cache_is_cold` to print a one-line notice before a cold start (with an estimate
+from the machine's load, and on a terminal a running clock of the seconds spent), and
 :func:`warm_up` to pay the one-off cost before a fit starts its clock, so that the wall time a report
 gives is the fit's own.  :func:`start_engine` prints the notice on standard error.
 """
@@ -14,9 +15,81 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["engine_cache_is_cold", "warm_up", "start_engine", "EngineLoader", "COMPILING_NOTICE", "elapsed"]
+__all__ = ["engine_cache_is_cold", "warm_up", "start_engine", "EngineLoader", "COMPILING_NOTICE", "elapsed",
+           "compile_estimate", "compiling_notice"]
 
-COMPILING_NOTICE = "adhfit: compiling the engine (once, about a minute)…"
+#: what the first run prints before the kernels compile (the estimate is added: :func:`compile_estimate`)
+COMPILING_NOTICE = "adhfit: compiling the engine (once"
+#: seconds the first compile takes on an idle 2-core machine (measured: 79 s at load 2 on 2 cores, 330 s at
+#: load 5-8); the estimate scales it by how busy the cores are
+COMPILE_SECONDS_IDLE = 60.0
+
+
+def compile_estimate(load: float | None = None, cores: int | None = None) -> str:
+    """An honest estimate of the first compile, from the machine's load: ``"about 2 minutes"``.
+
+    Parameters
+    ----------
+    load : float, optional
+        The 1-minute load average (default: the machine's, where it can be read).
+    cores : int, optional
+        The cores this process may use (default: as counted by :func:`os.sched_getaffinity`).
+    """
+    import os  # noqa: PLC0415
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except (AttributeError, OSError):
+            load = 0.0
+    if cores is None:
+        try:
+            cores = len(os.sched_getaffinity(0))
+        except (AttributeError, OSError):
+            cores = os.cpu_count() or 1
+    busy = max(1.0, (load + 1.0) / max(1, cores))  # this run shares the cores with ``load`` others
+    low, high = COMPILE_SECONDS_IDLE * busy, 1.5 * COMPILE_SECONDS_IDLE * busy
+    if high <= 100:
+        return "about a minute"
+    return f"{max(1, round(low / 60))}-{max(2, round(high / 60))} minutes at this machine's load"
+
+
+def compiling_notice() -> str:
+    """The one line printed before a cold start, with the estimate."""
+    return f"{COMPILING_NOTICE}; {compile_estimate()})…"
+
+
+class _CompileClock:
+    """The notice, then (on a terminal) its elapsed seconds rewritten in place every second until
+    :meth:`stop`, which closes the line with the time it took.  In a pipe: the notice line only."""
+
+    def __init__(self, *, enabled: bool | None = None) -> None:
+        self._tty = sys.stderr.isatty() if enabled is None else enabled
+        self._t0 = time.perf_counter()
+        self._stop = threading.Event()
+        self._text = compiling_notice()
+        if not self._tty:
+            print(self._text, file=sys.stderr, flush=True)
+            self._thread = None
+            return
+        self._thread = threading.Thread(target=self._tick, daemon=True, name="adhfit-compile-clock")
+        self._thread.start()
+
+    def _tick(self) -> None:
+        while True:
+            sys.stderr.write(f"\r{self._text} {time.perf_counter() - self._t0:.0f} s")
+            sys.stderr.flush()
+            if self._stop.wait(1.0):
+                return
+
+    def stop(self) -> None:
+        """End the clock; on a terminal, the line ends with the seconds the compile took."""
+        if self._thread is None:
+            return
+        self._stop.set()
+        self._thread.join()
+        self._thread = None
+        sys.stderr.write(f"\r\x1b[K{self._text} done in {time.perf_counter() - self._t0:.0f} s\n")
+        sys.stderr.flush()
 
 
 def _marker() -> Path:
@@ -125,8 +198,7 @@ class EngineLoader:
     GIL, in LLVM).  On a cold cache the notice is printed first (not with ``quiet``)."""
 
     def __init__(self, *, quiet: bool = False) -> None:
-        if not quiet and engine_cache_is_cold():
-            print(COMPILING_NOTICE, file=sys.stderr, flush=True)
+        self._clock = _CompileClock() if not quiet and engine_cache_is_cold() else None
         self._seconds = 0.0
         self._error: BaseException | None = None
         self._thread = threading.Thread(target=self._run, daemon=True)
@@ -137,6 +209,9 @@ class EngineLoader:
             self._seconds = warm_up("displacement")
         except BaseException as err:  # noqa: BLE001 - raised again in the main thread by wait()
             self._error = err
+        finally:
+            if self._clock is not None:
+                self._clock.stop()
 
     def wait(self, control: str) -> float:
         """Block until the kernels are loaded (those of ``control`` too); returns the seconds it took."""
@@ -154,6 +229,9 @@ def start_engine(control: str, *, quiet: bool = False) -> float:
 
     On a cold numba cache, prints the one-line notice on standard error first (not with ``quiet``).
     """
-    if not quiet and engine_cache_is_cold():
-        print(COMPILING_NOTICE, file=sys.stderr, flush=True)
-    return warm_up(control)
+    clock = _CompileClock() if not quiet and engine_cache_is_cold() else None
+    try:
+        return warm_up(control)
+    finally:
+        if clock is not None:
+            clock.stop()

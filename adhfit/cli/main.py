@@ -131,7 +131,8 @@ def _simulate_parser(sub) -> None:
 def _fit_parser(sub) -> None:
     from .arguments import add_fit_arguments  # noqa: PLC0415 - keeps simulate light
     from .fit import run_fit  # noqa: PLC0415
-    add_fit_arguments(sub).set_defaults(run=run_fit)
+    from .interrupt import interruptible  # noqa: PLC0415 - Ctrl-C: one line, status 130, no process left
+    add_fit_arguments(sub).set_defaults(run=interruptible(run_fit))
 
 
 def _run_simulate(args) -> int:

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["check_output_dir", "summary_text", "estimate_line", "exit_status", "EXIT_MISFIT"]
+__all__ = ["check_output_dir", "writable_folder", "os_error_words", "summary_text", "estimate_line", "exit_status",
+           "EXIT_MISFIT"]
 
 #: ``adhfit fit``'s exit status when the reports are written but the model does not describe the data
 #: (the first warning says why and names the likely causes: a unit, a scene setting, the slip condition)
@@ -37,6 +38,63 @@ def check_output_dir(path: Path) -> Path:
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError("-o/--output", str(path), "a folder you can write to",
                          f"{parent} is not writable; choose another folder, or change its permissions.")
+    try:
+        _probe(path)
+    except OSError as err:  # e.g. /proc or a read-only mount, which os.access does not see
+        raise InputError("-o/--output", str(path), "a folder you can write to",
+                         os_error_words(err, path) + ".") from None
+    return path
+
+
+def _probe(path: Path) -> None:
+    """Create ``path`` and a file in it, then remove what was created: the folder is left as found."""
+    missing = [q for q in [path, *path.parents] if not q.exists()]
+    created = []
+    try:
+        for q in reversed(missing):
+            try:
+                q.mkdir()
+            except FileExistsError:  # made by another process meanwhile: not ours to remove
+                continue
+            created.append(q)
+        probe = path / f".adhfit-write-test-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+    finally:
+        for q in reversed(created):
+            try:
+                q.rmdir()
+            except OSError:
+                pass
+
+
+def os_error_words(err: OSError, path: str | Path | None = None) -> str:
+    """One sentence for a failed write: the path, what went wrong in words, and the fix (no errno)."""
+    import errno  # noqa: PLC0415
+    where = path if path is not None else (err.filename or "the output folder")
+    why = {errno.EACCES: "permission denied", errno.EPERM: "permission denied",
+           errno.EROFS: "the file system is read-only", errno.ENOSPC: "the disk is full",
+           errno.EDQUOT: "the disk quota is used up", errno.ENOTDIR: "a part of the path is a file, not a folder",
+           errno.EEXIST: "a file of that name is in the way", errno.ENAMETOOLONG: "the name is too long"}
+    reason = why.get(err.errno, (err.strerror or type(err).__name__).lower())
+    fix = ("free some space, or choose another folder with -o" if err.errno in (errno.ENOSPC, errno.EDQUOT)
+           else "choose another folder with -o, or fix the folder's permissions")
+    return f"cannot write {where}: {reason}; {fix}"
+
+
+def writable_folder(path: str | Path) -> Path:
+    """Create the output folder ``path`` (and its parents) now, or say in one line why not.
+
+    Raises
+    ------
+    InputError
+        The folder cannot be created or written (the message names the path and the fix).
+    """
+    path = check_output_dir(Path(path))
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError("-o/--output", str(path), "a folder you can write to", os_error_words(err, path) + ".") from None
     return path
 
 

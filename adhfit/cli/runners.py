@@ -5,22 +5,36 @@ its own result and never raises for a bad input (see :func:`adhfit.cli.batch.run
 handed to ``report`` as they finish; the caller puts them back in job order.  A job whose process dies
 (a crash, not an error) or whose task is lost is handed to ``crashed(index, message)`` instead, and the
 other jobs go on.
+
+Stopping (docs/contracts.md A7b).  A :class:`KeyboardInterrupt` in the caller (Ctrl-C) cancels the
+queued jobs, kills the running ones and is raised again at once; the results reported before it stand.
+A local worker process leads its own process group (so that the terminal's Ctrl-C reaches only the
+parent, which decides) and dies, with every process it started, when its parent dies, however it dies
+(a SIGKILL included): on Linux the kernel tells it (``PR_SET_PDEATHSIG``), everywhere a watchdog thread
+polls the parent's pid.
 """
 from __future__ import annotations
 
 import os
+import signal
 import sys
+import threading
+import time
 from typing import Any, Callable, Sequence
 
 from ..errors import InputError
 
-__all__ = ["default_workers", "run_local", "run_dask"]
+__all__ = ["default_workers", "run_local", "run_dask", "WATCHDOG_PERIOD_S"]
 
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
+#: how often a local worker checks that its parent is alive (seconds; the kernel's notice is immediate)
+WATCHDOG_PERIOD_S = 0.5
 
 Report = Callable[[Any], None]
 Crashed = Callable[[int, str], Any]
+
+_worker = {"pid": None}
 
 
 def default_workers() -> int:
@@ -49,13 +63,76 @@ def _context(preload: Sequence[str] = ()):
     return multiprocessing.get_context("spawn")
 
 
+def _die_with_group() -> None:
+    """End this worker and every process it started (its process group)."""
+    try:
+        os.killpg(0, signal.SIGKILL)
+    finally:
+        os._exit(128 + signal.SIGKILL)
+
+
+def _on_sigterm(signum: int, frame) -> None:  # noqa: ARG001 - the signal module's signature
+    if os.getpid() == _worker["pid"]:
+        _die_with_group()  # the parent died (the kernel's notice) or stopped the pool
+    os._exit(128 + signal.SIGTERM)  # a process a fit forked inherited this handler: die as SIGTERM would
+
+
+def _parent_death_signal(sig: int) -> bool:
+    """Ask Linux to send ``sig`` to this process when its parent dies (prctl PR_SET_PDEATHSIG)."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        import ctypes  # noqa: PLC0415
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(1, sig, 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return False
+
+
+def _watch(parent: int) -> None:
+    while True:
+        time.sleep(WATCHDOG_PERIOD_S)
+        if os.getppid() != parent:
+            _die_with_group()
+
+
+def _worker_init(parent: int) -> None:
+    """Run first in every local worker: its own process group, Ctrl-C left to the parent, and death
+    with the parent (module docstring)."""
+    _worker["pid"] = os.getpid()
+    os.setpgrp()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    _parent_death_signal(signal.SIGTERM)
+    if os.getppid() != parent:  # the parent died before the notice was armed
+        _die_with_group()
+    threading.Thread(target=_watch, args=(parent,), daemon=True, name="adhfit-parent-watchdog").start()
+
+
+def _stop(pool) -> None:
+    """Cancel the queued jobs and kill every worker with the processes it started; returns at once."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())  # the pool's own, not every child
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        for kill in (os.killpg, os.kill):  # its group; the process alone if it has no group of its own yet
+            try:
+                kill(proc.pid, signal.SIGKILL)
+                break
+            except OSError:
+                continue
+    for proc in procs:
+        proc.join(timeout=2.0)
+
+
 def _pass(fn: Callable, calls: Sequence[tuple], indices: list[int], workers: int, report: Report,
           crashed: Crashed, ctx) -> list[int]:
     """One pool over ``indices``; returns the indices a dead worker process took down."""
     from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: PLC0415
     from concurrent.futures.process import BrokenProcessPool  # noqa: PLC0415
     broken = []
-    with ProcessPoolExecutor(max_workers=max(1, min(workers, len(indices))), mp_context=ctx) as pool:
+    pool = ProcessPoolExecutor(max_workers=max(1, min(workers, len(indices))), mp_context=ctx,
+                               initializer=_worker_init, initargs=(os.getpid(),))
+    try:
         futures = {pool.submit(fn, *calls[i]): i for i in indices}
         for fut in as_completed(futures):
             i = futures[fut]
@@ -65,6 +142,10 @@ def _pass(fn: Callable, calls: Sequence[tuple], indices: list[int], workers: int
                 broken.append(i)
             except Exception as err:  # noqa: BLE001 - e.g. an argument that does not pickle
                 report(crashed(i, f"{type(err).__name__}: {err}"))
+    except BaseException:  # Ctrl-C (KeyboardInterrupt): stop everything now, say so above
+        _stop(pool)
+        raise
+    pool.shutdown(wait=True)
     return sorted(broken)
 
 
@@ -99,7 +180,8 @@ def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report,
     except (OSError, TimeoutError, ValueError) as err:
         raise InputError("--scheduler", address, "the address of a running Dask scheduler, e.g. "
                          "tcp://127.0.0.1:8786", reason=f"({' '.join(str(err).split())})") from None
-    with client:
+    futures = []
+    try:
         futures = [client.submit(fn, *call, pure=False) for call in calls]
         index = {f.key: i for i, f in enumerate(futures)}
         for fut in as_completed(futures):
@@ -108,3 +190,11 @@ def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report,
                 report(fut.result())
             except Exception as err:  # noqa: BLE001 - a lost worker or a task error: that job only
                 report(crashed(i, f"{type(err).__name__}: {err}"))
+    except BaseException:  # Ctrl-C: the cluster drops the queued and running jobs of this batch
+        try:
+            client.cancel(futures, force=True)
+        except Exception:  # noqa: BLE001 - the cluster may be gone; nothing of ours keeps running here
+            pass
+        raise
+    finally:
+        client.close(timeout=5)
