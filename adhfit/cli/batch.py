@@ -1,8 +1,8 @@
 """``adhfit fit`` over several curves: one summary table, and a bad file never stops the run.
 
 Which files (:mod:`.discovery`)
-    Every argument is a curve file or a folder.  A folder stands for every ``*.csv``, ``*.tsv`` and
-    LabVIEW ``*.lvm`` file below it
+    Every argument is a curve file or a folder.  A folder stands for every curve file below it
+    (:func:`adhfit.readers.folder_patterns`)
     (recursively, sorted; hidden files and folders and the output directory are skipped).  A file
     there that cannot be fitted (unreadable, a pipe, a broken link, a link pointing outside the folder)
     is a failed row that says why.  The run is a

@@ -1,9 +1,9 @@
 """Which curves a batch fits, with which scene and into which folder (docs/contracts.md A7).
 
 Which files
-    Every argument is a curve file or a folder.  A folder stands for every ``*.csv``, ``*.tsv`` and
-    LabVIEW ``*.lvm`` file below it (recursively, sorted; hidden files and folders and the output
-    directory are skipped).  A file there that cannot be fitted (unreadable, a pipe, a broken link, a
+    Every argument is a curve file or a folder.  A folder stands for every curve file below it (the
+    patterns of :func:`adhfit.readers.folder_patterns`: ``*.csv``, ``*.tsv``, LabVIEW ``*.lvm``, Excel
+    ``*.xlsx``; recursively, sorted; hidden files and folders and the output directory are skipped).  A file there that cannot be fitted (unreadable, a pipe, a broken link, a
     link pointing outside the folder) is a job with a ``problem``: a failed row that says why.
 
 Which scene (when ``--scene`` is not given)
@@ -18,12 +18,14 @@ from pathlib import Path
 from typing import Iterable
 
 from ..errors import InputError
+from ..readers import folder_patterns
 
 __all__ = ["Job", "discover", "is_batch", "single_scene", "SCENE_NAME", "CURVE_PATTERNS"]
 
 SCENE_NAME = "scene.toml"
-#: the files a folder stands for: text exports (LabVIEW included); a folder of other .txt files is common
-CURVE_PATTERNS = ("*.csv", "*.tsv", "*.lvm")
+#: the files a folder stands for, from the one list of formats (readers.FORMATS); a folder of other
+#: .txt files is common, so .txt is read when named but not collected
+CURVE_PATTERNS = folder_patterns()
 
 
 @dataclass(frozen=True)
@@ -116,7 +118,7 @@ def discover(paths: Iterable[str | Path], *, scene: str | Path | None = None,
         else:
             raise InputError("DATA", str(p), "an existing CSV file or folder")
     if not found:
-        raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one *.csv, *.tsv or *.lvm file")
+        raise InputError("DATA", " ".join(map(str, paths)), "files or folders holding at least one curve file (" + ", ".join(CURVE_PATTERNS) + ")")
     seen, unique = set(), []
     for f, root, in_folder in found:
         key = Path(os.path.realpath(f))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import re
 
 from ..errors import DataError, shown
-from .text import Layout, _classify
+from .text import Layout, classify_lines
 
 __all__ = ["lvm_layout"]
 
@@ -64,7 +64,7 @@ def lvm_layout(lines: list[str], where: str) -> Layout:
             channel += 1
     layout = Layout(sep=sep, decimal=decimal, header_no=header + 1, units=units,
                     time_columns=("X_Value",) if is_time else ())
-    _classify(lines, layout, "LabVIEW header")
+    classify_lines(lines, layout, "LabVIEW header")
     layout.description = ("LabVIEW .lvm, " + {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space"}[sep]
                           + "-separated" + (", decimal comma" if decimal == "," else "")
                           + ", units from Y_Unit_Label")

@@ -207,7 +207,7 @@ def text_layout(lines: list[str], where: str, *, separators: tuple[str, ...] = _
     sep, decimal, width = _sniff(lines[:_SNIFF_LINES], separators)
     header_no, units_no = _find_header(lines, sep, decimal, width, where)
     layout = Layout(sep=sep, decimal=decimal, header_no=header_no, units_no=units_no)
-    _classify(lines, layout, "metadata above the header")
+    classify_lines(lines, layout, "metadata above the header")
     parts = [_SEP_NAME[sep]] + (["decimal comma"] if decimal == "," else [])
     n_meta = sum(1 for _, reason in layout.excluded if reason == "metadata above the header")
     parts += [f"{n_meta} metadata line(s)"] if n_meta else []
@@ -257,7 +257,7 @@ def _is_unit(cell: str) -> bool:
     return not (is_number(cell, ".") or is_number(cell, ",")) and is_unit(cell)
 
 
-def _classify(lines: list[str], layout: Layout, above_reason: str) -> None:
+def classify_lines(lines: list[str], layout: Layout, above_reason: str) -> None:
     """Fill ``layout.rows`` and ``layout.excluded`` from the header and units-row positions."""
     for no, line in enumerate(lines, start=1):
         if no == layout.header_no:
