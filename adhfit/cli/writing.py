@@ -116,7 +116,7 @@ def summary_text(result, out: Path) -> str:
         lines.append(estimate_line(name, e))
     for w in d.get("warnings", []) or []:  # a fit that did not converge is said on the command line too
         if w.startswith(("The fit did not converge", "MCMC NOT CONVERGED")) or \
-                "The model does not describe these data" in w:
+                "The model does not describe these data" in w or "The model may not describe these data" in w:
             lines.append(f"WARNING: {w}")
     n_warn = len(d.get("warnings", []) or [])
     lines.append(f"{n_warn} warning(s); {d.get('model_evaluations')} model evaluations, "

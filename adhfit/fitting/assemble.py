@@ -15,7 +15,7 @@ from .checks import curve_entries, curve_warnings, plot_data
 from .membrane import effect_warning
 from .objective import ObjectiveFit
 from .result import Estimate, FitResult, SlipFit
-from .summary import MISFIT_HEAD, summarize
+from .summary import MISFIT_HEAD, POSSIBLE_MISFIT_HEAD, summarize
 
 __all__ = ["assemble", "hull", "reported", "provenance", "SIGMA_ESTIMATED"]
 
@@ -81,8 +81,8 @@ def _warnings(problem, stage, rep: SlipFit) -> list[str]:
                    else f"The slip condition is undecided: the data cannot tell no-slip from frictionless contact for "
                    f"sure ({why}). The estimates are the {fav} fit's, and their 95 % intervals cover both "
                    f"conditions' intervals.")
-    misfit = [w for w in out if MISFIT_HEAD in w]  # said first: every number below depends on it
-    out = misfit + [w for w in out if MISFIT_HEAD not in w]
+    first = (MISFIT_HEAD, POSSIBLE_MISFIT_HEAD)  # said first: every number below depends on it
+    out = [w for w in out if any(h in w for h in first)] + [w for w in out if not any(h in w for h in first)]
     w_e, mu_e = rep.parameters["work_of_adhesion"], rep.parameters["mu_h"]
     if w_e.value and mu_e.value and w_e.value / mu_e.value > _W_EDGE * DIMENSIONLESS["w"].upper:
         out.append(f"W_ad/μh = {w_e.value / mu_e.value:.3g} is at the largest value the model covers "

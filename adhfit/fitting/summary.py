@@ -19,7 +19,8 @@ from .checks import correlation_factor, widen, zero_drift
 from .result import SlipFit
 from .starts import noise_estimate
 
-__all__ = ["summarize", "DISAGREE", "model_curve", "status_warnings", "MISFIT_RATIO", "MISFIT_HEAD"]
+__all__ = ["summarize", "DISAGREE", "model_curve", "status_warnings", "MISFIT_RATIO", "MISFIT_HEAD",
+           "POSSIBLE_MISFIT_HEAD", "correlated_ratio", "implausible"]
 
 #: profile and covariance half-widths differing by more than this fraction earn a note
 DISAGREE = 0.25
@@ -31,6 +32,8 @@ NUMERICAL = 3e-4
 MISFIT_RATIO = 2.0
 #: how every misfit sentence begins (the result puts it first; the command line prints it)
 MISFIT_HEAD = "The model does not describe these data to within their row-to-row scatter"
+#: how a sentence begins when the residuals are as large as correlated noise could make them
+POSSIBLE_MISFIT_HEAD = "The model may not describe these data"
 
 
 def model_curve(model, si: dict) -> dict:
@@ -144,38 +147,85 @@ def _curve_warnings(fit, k: int, row: dict, split, factor: float, est: dict) -> 
         out.append(f"{who}The model does not fit to the given noise level: reduced χ² = {row['redchi']:.3g}.")
     if split is None and est["work_of_adhesion"].status == "determined":
         out.append(f"{who}The data end before pull-off: W_ad rests on the unloading curve alone.")
-    drift = _drift(fit, k, row, split)
+    drift = _drift(fit, k, row, split, factor)
     if drift:
         out.append(who + drift)
     return out
 
 
-def _misfit(row: dict, member, factor: float, rho: float) -> str | None:
-    """The sentence for a curve the model does not describe: residuals above :data:`MISFIT_RATIO` times
-    the row-to-row scatter (second differences, which a smooth misfit leaves alone).  Correlated noise
-    (an oversampled, filtered load cell) can look the same, so both are named; a misfit comes first."""
+def correlated_ratio(rho: float) -> float:
+    """The residual RMS over the row-to-row scatter (second differences) that AR(1) noise of lag-1
+    autocorrelation ρ gives: var(Δ²e) = 2σ²(3 - 4ρ + ρ²), against 6σ² for white noise."""
+    rho = min(max(rho, 0.0), 0.99)
+    return math.sqrt(3.0 / (3.0 - 4.0 * rho + rho * rho))
+
+
+_CAUSES = ("a unit or scale on a column (a force in mN headed [N], a displacement in mm headed [um]), the "
+           "scene's pressure or gap (a bare number is read in Pa or m) or a radius (a bare number is in metres), "
+           "or the slip condition")
+
+
+#: plausibility of a fitted test (:func:`implausible`): the fixed pressure's P b/(2μh) under displacement
+#: control below this is a membrane hardly inflated; a substrate radius above this many membrane radii is
+#: a flat plate; a W_ad above this (J/m²) is beyond near-equilibrium adhesion a membrane test measures
+P_MIN, RS_MAX, W_MAX = 0.01, 100.0, 50.0
+
+
+def implausible(member, shared: dict) -> list[str]:
+    """What a fitted test cannot be, in words (each names the likely mistake): a membrane hardly inflated
+    under displacement control, a 'sphere' far larger than the membrane, a W_ad beyond membrane tests."""
+    sc = member.model.scene
+    out = []
+    mu, w = shared["mu_h"], shared["work_of_adhesion"]
+    if sc.control == "displacement" and sc.pressure is not None:
+        p = sc.pressure * sc.membrane_radius / (2.0 * mu)
+        if abs(p) < P_MIN:
+            out.append(f"at the fitted μh the scene's pressure gives P b/(2μh) = {p:.2g}, a membrane hardly "
+                       f"inflated (a pressure in Pa meant as kPa, or a force in mN read as N, which makes μh "
+                       f"1000x too large)")
+    if math.isfinite(sc.substrate_radius) and sc.substrate_radius > RS_MAX * sc.membrane_radius:
+        out.append(f"the substrate radius is {sc.substrate_radius / sc.membrane_radius:.3g} times the membrane's "
+                   f"(a flat plate; a radius in mm meant, or 'inf' for a flat substrate?)")
+    if w > W_MAX:
+        out.append(f"W_ad = {w:.3g} J/m² is beyond what a membrane test measures (near-equilibrium adhesion, "
+                   f"up to ~10 J/m²): a force or length column in the wrong unit?")
+    return out
+
+
+def _misfit(row: dict, member, factor: float, rho: float, shared: dict) -> tuple[str | None, bool]:
+    """(sentence, certain) for a curve the model may not describe: residuals above :data:`MISFIT_RATIO`
+    times the row-to-row scatter (second differences, which a smooth misfit leaves alone).  Correlated
+    noise (an oversampled, filtered load cell) raises that ratio too, to :func:`correlated_ratio` of the
+    residuals' own ρ; beyond :data:`MISFIT_RATIO` times that, or with a fitted test that cannot be
+    (:func:`implausible`), no noise explains it (``certain``: the verdict is capped and the command line
+    exits 5).  Otherwise both explanations are named, the misfit first."""
     sigma, noise = row["sigma_force"], noise_estimate(member.model.force)
     if not (noise > 0 and sigma > MISFIT_RATIO * noise):
-        return None
-    follow = f" and follow one another from row to row (lag-1 autocorrelation {rho:.2f})" if factor > 1.0 else ""
-    tail = (f" If instead the load cell's noise is correlated (an oversampled, filtered signal), the intervals, "
-            f"widened {factor:.2g}-fold, allow for it." if factor > 1.0 else "")
-    return (f"{MISFIT_HEAD}: the residuals ({sigma * 1e3:.3g} mN) are {sigma / noise:.2g} times the row-to-row "
-            f"scatter ({noise * 1e3:.3g} mN){follow}. Likely causes: a unit or scale on a column (a force in mN "
-            f"headed [N], a displacement in mm headed [um]), the scene's pressure or gap (a bare number is read in "
-            f"Pa or m) or a radius (a bare number is in metres), or the slip condition. The slip verdict is "
-            f"capped at 'positive'.{tail}")
+        return None, False
+    ratio = sigma / noise
+    allowed = correlated_ratio(rho) if factor > 1.0 else 1.0
+    odd = implausible(member, shared)
+    if ratio > MISFIT_RATIO * allowed or odd:
+        why = (f"; and {'; '.join(odd)}" if odd else ", more than any noise explains")
+        return (f"{MISFIT_HEAD}: the residuals ({sigma * 1e3:.3g} mN) are {ratio:.2g} times the row-to-row scatter "
+                f"({noise * 1e3:.3g} mN){why}. Likely causes: {_CAUSES}. The slip verdict is capped at "
+                f"'positive'."), True
+    return (f"{POSSIBLE_MISFIT_HEAD}: the residuals ({sigma * 1e3:.3g} mN) are {ratio:.2g} times the row-to-row "
+            f"scatter ({noise * 1e3:.3g} mN) and are correlated from row to row (lag-1 autocorrelation "
+            f"{rho:.2f}). Either the model does not describe these data (likely causes: {_CAUSES}), or the load "
+            f"cell's noise is correlated (an oversampled, filtered signal): the intervals were widened "
+            f"{factor:.2g}-fold and the slip evidence discounted alike."), False
 
 
-def _fitted_drift(fit, k: int) -> str | None:
-    """The sentence for a fitted drift of the zero that the data resolve (2 standard errors, and above
-    the model's precision)."""
+def _fitted_drift(fit, k: int, factor: float = 1.0) -> str | None:
+    """The sentence for a fitted drift of the zero that the data resolve (2 standard errors, widened like
+    the intervals when the noise is correlated, and above the model's precision)."""
     m = fit.members[k]
     p = fit.best.params.get(fit.spar.name("force_drift", k))
     if p is None:
         return None
     drift = p.value * m.par.f_scale
-    se = p.stderr * m.par.f_scale if p.stderr is not None and np.isfinite(p.stderr) else None
+    se = p.stderr * m.par.f_scale * factor if p.stderr is not None and np.isfinite(p.stderr) else None
     f_peak = float(np.max(np.abs(m.model.force)))
     if se is None or abs(drift) <= max(2.0 * se, DRIFT_FLOOR * f_peak):
         return None
@@ -184,11 +234,11 @@ def _fitted_drift(fit, k: int) -> str | None:
             f"(offsets.force_drift ± {se * 1e3:.2g} mN). Re-tare the load cell before the next test.")
 
 
-def _drift(fit, k: int, row: dict, split) -> str | None:
+def _drift(fit, k: int, row: dict, split, factor: float = 1.0) -> str | None:
     """The zero drift: fitted (:func:`_fitted_drift`), or else the warning of :func:`.checks.zero_drift`
     from the rows at zero model force."""
     if fit.members[k].par.fit_force_drift:
-        return _fitted_drift(fit, k)
+        return _fitted_drift(fit, k, factor)
     m = fit.members[k].model
     predicted = row["predicted"]
     if split is None or not np.all(np.isfinite(predicted)):
@@ -244,8 +294,9 @@ def summarize(fit, *, profile: bool = True) -> SlipFit:
                  for k, (lo, hi) in limits.items()}
     lower = est["work_of_adhesion"].status == "lower_bound"
     warn = status_warnings(est, reached(fit) if lower else None)
+    shared_si = fit.si()[0]
     for row, m in zip(rows, fit.members):
-        row["misfit"] = _misfit(row, m, factor, rho)
+        row["misfit"], row["certain"] = _misfit(row, m, factor, rho, shared_si)
     if factor > 1.0 and not any(r["misfit"] for r in rows):
         which = "" if len(rows) == 1 else " of at least one curve"
         warn.append(f"The force noise{which} is correlated from row to row (lag-1 autocorrelation {rho:.2f}): "
@@ -265,4 +316,4 @@ def summarize(fit, *, profile: bool = True) -> SlipFit:
                    n_histories=sum(m.n_histories for m in models), success=bool(best.success),
                    message=str(best.message), raw=best if not fit.joint else fit,
                    diagnostics=tuple(_diagnostics(fit, est, limits)), split=splits[0] if one else None,
-                   autocorrelation=rho, widening=factor, misfit=any(bool(r["misfit"]) for r in rows))
+                   autocorrelation=rho, widening=factor, misfit=any(r["certain"] for r in rows))
