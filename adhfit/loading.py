@@ -17,7 +17,7 @@ from functools import lru_cache
 import numpy as np
 
 from .core.inflation import apex_deflection, critical_pressure
-from .errors import ConvergenceError, InputError
+from .errors import ConvergenceError, DomainError, InputError
 from .params import A_MAX_OVER_RS, DIMENSIONLESS, check_scene
 
 __all__ = ["History", "history", "state_at", "STAGES", "COLUMNS"]
@@ -60,8 +60,8 @@ class _Kernels:
     """The compiled kernels, imported on first use: ``import adhfit`` does not import numba."""
 
     def __getattr__(self, name):
-        from .core import branches, continuation, history, newton, solve  # noqa: PLC0415
-        for mod in (history, branches, continuation, newton, solve):
+        from .core import branches, continuation, ends, history, newton, solve  # noqa: PLC0415
+        for mod in (history, branches, continuation, newton, solve, ends):
             if hasattr(mod, name):
                 setattr(self, name, getattr(mod, name))
                 return getattr(mod, name)
@@ -88,6 +88,23 @@ def _a_cap(c):
     """Largest admissible a_max: the table's bound and 0.95 rs."""
     cap = DIMENSIONLESS["a_max"].upper
     return min(cap, A_MAX_OVER_RS / c) if c > 0 else cap
+
+
+def _resolve_end(v, c, pc, kappa_dc, d_fix, p_cr):
+    """a_max from delta_max or p_max, along the making-contact branch (:mod:`.core.ends`); an end the
+    branch never reaches is an InputError naming the largest value it does reach, and where."""
+    name = "p_max" if pc else "delta_max"
+    target = float(v[name])
+    res = K.resolve_end(pc, kappa_dc, d_fix, p_cr, c, target, _a_cap(c))
+    if math.isfinite(res.a):
+        return float(res.a)
+    if not math.isfinite(res.top):
+        raise InputError(name, target, "reached on loading", f"No contact state is inside the model: {res.why}.")
+    low = f"{p_cr:.6g}" if pc else "0"
+    raise InputError(name, target, f"a number in ({low}, {res.top:.6g}], the largest "
+                     f"{'pressure' if pc else 'displacement'} reached on loading (at contact radius "
+                     f"{res.a_top:.4g}): {res.why}",
+                     f"Lower {name}, or give a_max.")
 
 
 def _loading_end(v, c, pc):
@@ -191,6 +208,8 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     d_fix = float(v["d"]) if pc else 0.0
     kappa_dc = 0.0 if pc else float(v["p"])
     p_cr = float(critical_pressure(d_fix)) if pc else 0.0
+    if not math.isfinite(end[0]):
+        end = (_resolve_end(v, c, pc, kappa_dc, d_fix, p_cr),) + end[1:]
     (status, err, a_m, out, counts, tp_pos, summ, f_max, branch_end) = K.run(
         pc, slip == "no-slip", kappa_dc, d_fix, p_cr, c, float(v["w"]), *end, *_grids(v["points"]),
         A_END)
