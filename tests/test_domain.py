@@ -66,3 +66,59 @@ def test_unreachable_delta_max_names_the_analytic_case_one_radius():
 def test_reachable_p_max_past_one_is_solved():
     r = adhfit.simulate("pressure", "no-slip", d=0.2, w=0.2, rs=0.5, p_max=1.3, points=60)
     assert r.frame["p"].iloc[len(r.frame[r.frame.stage == "making_contact"]) - 1] == pytest.approx(1.3, abs=1e-9)
+
+
+# --------------------------------------------------------------------------------------------------
+# DomainError where the model's end is proven; other grids before giving up
+
+
+def test_making_contact_past_case_one_is_a_domain_error_with_the_analytic_bound():
+    # audit: "end of loading: state outside the model's domain ... did not converge"
+    p, rs = -0.9677112760706967, 0.11803455152948787
+    with pytest.raises(DomainError) as info:
+        adhfit.simulate("displacement", "frictionless", p=p, w=3.323790393597303, rs=rs,
+                        a_max=0.06647535853862992)
+    bound = _number_after(str(info.value), "a_max must stay below")
+    assert bound == pytest.approx(math.sqrt((1.0 + p) / (p + 1.0 / rs)), rel=1e-5)
+    assert "did not converge" not in str(info.value)
+    r = adhfit.simulate("displacement", "frictionless", p=p, w=3.323790393597303, rs=rs,
+                        a_max=0.99 * bound, points=60)  # just inside: a history
+    assert r.inputs["a_max"] == pytest.approx(0.99 * bound)
+
+
+def test_frictionless_delamination_leaving_the_model_is_a_domain_error_a_state_check_confirms():
+    kw = dict(p=0.7416890298211145, w=5.263504219473203, rs=1.7432676236873814, a_max=0.5134500216830367)
+    with pytest.raises(DomainError) as info:
+        adhfit.simulate("displacement", "frictionless", **kw)
+    a_end = _number_after(str(info.value), "only for a >=")
+    # second method: single explicit states either side of the reported radius
+    from adhfit.loading import state_at
+    ok = state_at("displacement", "frictionless", "delamination", **kw, a=a_end * (1 + 1e-6))
+    assert math.isfinite(ok["f"])
+    with pytest.raises(ConvergenceError):
+        state_at("displacement", "frictionless", "delamination", **kw, a=a_end * (1 - 1e-6))
+
+
+@pytest.mark.parametrize("scene", [
+    # audit scenes that failed at points=200 and are solved by another row grid
+    dict(control="displacement", slip="no-slip", p=0.8479600653220087, w=6.542116544684643,
+         rs=0.7480447397367088, a_max=0.6915444050367855),
+    dict(control="displacement", slip="no-slip", p=0.7346410112843984, w=8.10276249362778,
+         rs=2.051381291372604, delta_max=0.4865066070662236),
+])
+def test_a_scene_another_grid_solves_is_not_reported_as_no_solution(scene):
+    r = adhfit.simulate(**scene, points=200)
+    assert 60 <= len(r.frame) <= 1000  # retried on another grid: rows of the same order as `points`
+    r50 = adhfit.simulate(**scene, points=50)
+    assert r.summary["f_max"] == pytest.approx(r50.summary["f_max"], abs=1e-8)
+    assert r.summary["onset"]["f"] == pytest.approx(r50.summary["onset"]["f"], abs=1e-8)
+
+
+def test_cli_exit_status_tells_no_solution_from_bad_input(capsys):
+    from adhfit.cli.main import main
+    base = ["simulate", "--control", "displacement", "--slip", "frictionless", "--p", "-0.9677112760706967",
+            "--w", "3.32", "--rs", "0.11803455152948787"]
+    assert main(base + ["--a-max", "0.0664"]) == 4
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "no solution exists" in err and "a_max" in err
+    assert main(base + ["--a-max", "2"]) == 2

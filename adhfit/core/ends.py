@@ -40,13 +40,15 @@ class LoadingEnd:
         Largest control value the loading branch reaches (the valid range's upper end).
     a_top : float
         Where ``top`` is reached.
+    a_end : float
+        The largest contact radius of the loading branch (where it leaves the model, or the cap).
     why : str
         Why the branch stops there, in words (``"a_max = 0.95 rs"``, ``"the membrane turns past
         vertical at the clamp (Case I ends)"``, ...).
     """
 
-    def __init__(self, a, top, a_top, why):
-        self.a, self.top, self.a_top, self.why = a, top, a_top, why
+    def __init__(self, a, top, a_top, why, a_end=math.nan):
+        self.a, self.top, self.a_top, self.why, self.a_end = a, top, a_top, why, a_end
 
 
 def _hi_pressure(a, c):
@@ -131,4 +133,4 @@ def resolve_end(pressure: bool, kappa: float, d_fix: float, p_cr: float, c: floa
             a = brentq(lambda x: f(x) - target, grid[j - 1], a_top, xtol=_XTOL, rtol=1e-15, maxiter=200)
             return LoadingEnd(a, math.nan, math.nan, "")
         why = f"the control value peaks on loading at a = {a_top:.6g} and falls after it"
-    return LoadingEnd(math.nan, top, a_top, why)
+    return LoadingEnd(math.nan, top, a_top, why, grid[-1])
