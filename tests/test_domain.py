@@ -122,3 +122,39 @@ def test_cli_exit_status_tells_no_solution_from_bad_input(capsys):
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "no solution exists" in err and "a_max" in err
     assert main(base + ["--a-max", "2"]) == 2
+
+
+# --------------------------------------------------------------------------------------------------
+# the stability contract: the first turning point on the way out, whatever the row grid
+
+RISES = dict(control="displacement", slip="frictionless", p=0.2600980266025903, w=7.141000286762999,
+             rs=0.1076576349317153, delta_max=0.29539886251592334)
+
+
+def test_no_stable_row_has_the_control_above_its_loading_end_value():
+    # audit: stable pinning rows reached delta = 0.3986 > delta_max = 0.2954 (force up to 3x f_max)
+    r = adhfit.simulate(**RISES, points=200)
+    f = r.frame
+    end = f.index[f.stage == "making_contact"][-1]
+    after = f.loc[end + 1:]
+    assert (after.delta[after.stable] <= RISES["delta_max"] * (1 + 1e-9)).all()
+    # second method: single pinning states just past the end of loading press further in, so a test
+    # that pulls back from delta_max leaves the branch at once: the turning point is the end of loading
+    from adhfit.loading import state_at
+    kw = {k: v for k, v in RISES.items() if k not in ("control", "slip", "delta_max")}
+    s = state_at("displacement", "frictionless", "pinning", **kw, a_max=r.inputs["a_max"], alpha=1e-3)
+    assert s["delta"] > RISES["delta_max"]
+    assert r.summary["turning_point"]["delta"] == pytest.approx(RISES["delta_max"], abs=1e-8)
+
+
+@pytest.mark.parametrize("scene", [RISES, dict(control="displacement", slip="no-slip", p=0.6, w=0.2, rs=0.5,
+                                               a_max=0.25),
+                                   dict(control="pressure", slip="no-slip", d=0.2, w=0.2, rs=0.5, a_max=0.25)],
+                         ids=["rises-at-once", "base-displacement", "base-pressure"])
+def test_turning_point_and_f_min_do_not_depend_on_points(scene):
+    ref = adhfit.simulate(**scene, points=1001).summary
+    for n in (10, 13, 50, 200):
+        s = adhfit.simulate(**scene, points=n).summary
+        for key in ("turning_point", "f_min"):
+            for q in ("f", "p", "a"):
+                assert s[key][q] == pytest.approx(ref[key][q], abs=1e-8), (n, key, q)
