@@ -66,3 +66,18 @@ def test_compressive_scene_near_the_bound_still_runs():
     r = adhfit.simulate("displacement", "frictionless", p=-0.45, w=0.1, rs=2.0, a_max=0.3, lambda0=3.0,
                         membrane="exact", points=40)
     assert r.summary["f_max"] > 0.0 and math.isfinite(r.summary["f_min"]["f"])
+
+
+@pytest.mark.parametrize("scene", [
+    dict(control="displacement", slip="no-slip", p=0.6, w=0.2, rs=0.5, a_max=0.25, lambda0=1.5),
+    dict(control="pressure", slip="frictionless", d=0.2, w=0.2, rs=0.5, a_max=0.25, lambda0=1.2),
+], ids=["displacement-no-slip", "pressure-frictionless"])
+def test_exact_summary_does_not_depend_on_points(scene):
+    # audit: up to 80 % at 10-11 rows; the README promises extrema located to 1e-8
+    ref = adhfit.simulate(**scene, points=1001, membrane="exact").summary
+    for n in (10, 11, 50):
+        s = adhfit.simulate(**scene, points=n, membrane="exact").summary
+        assert s["f_max"] == pytest.approx(ref["f_max"], abs=1e-8)
+        for key in ("onset", "f_min", "turning_point"):
+            for q in ("f", "p", "a"):
+                assert s[key][q] == pytest.approx(ref[key][q], abs=1e-8), (n, key, q)

@@ -19,6 +19,7 @@ END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
 # shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
+H_FINAL = 2e-3  # width of the extremum's last stencil, relative to the onset's rho_a (``_extremum``)
 
 
 @dataclass
@@ -272,8 +273,13 @@ def _extremum(stage, states, key, sign):
     c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
     c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
     vs, xs = [st.rho_a for st in states[j0:j1]][::-1], [stage.x(st) for st in states[j0:j1]][::-1]
-    pts = []
-    for _ in range(3):
+    # the final stencil's width: small enough that the quartic's O(h^4) bias is ~1e-12, large enough
+    # that states solved to EXTREMUM_TOL locate the vertex to ~1e-10 (both measured against 1001 rows)
+    h_min = H_FINAL * states[0].rho_a
+    if h < h_min and lo + 2 * h_min < hi - 2 * h_min:
+        h = h_min
+    pts, found = [], None
+    for _ in range(6):
         grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
         pts = stage.path(grid, vs, xs, xs[-1], tol=EXTREMUM_TOL)
         if len(pts) < len(grid):
@@ -282,9 +288,20 @@ def _extremum(stage, states, key, sign):
         if v is None:
             break
         if abs(v - c) <= 1.5 * h:
-            fin = stage.path([v], grid, [stage.x(st) for st in pts], xs[-1], tol=EXTREMUM_TOL)
-            return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
+            found = (v, grid, pts)
+            if h <= h_min:
+                break
+            # the stencil's vertex is off by O(h^4): shrink the stencil around it, so the summary's other
+            # quantities (linear in the locator there) do not depend on the row spacing
+            c, h = v, max(0.1 * h, h_min)
+            c = min(max(c, lo + 2 * h), hi - 2 * h)
+            vs, xs = grid, [stage.x(st) for st in pts]
+            continue
         c = min(max(v, lo + 2 * h), hi - 2 * h)
+    if found is not None:
+        v, grid, pts = found
+        fin = stage.path([v], grid, [stage.x(st) for st in pts], stage.x(pts[2]), tol=EXTREMUM_TOL)
+        return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
     return min(pts + [states[i]], key=lambda st: sign * key(st))
 
 
