@@ -219,6 +219,8 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         failures.append((pts, int(status), err.copy()))
         if status in (K.H_END_UNREACHABLE, K.H_MC_PRESSURE, K.H_MC_STATE):
             break  # explicit states at a given radius: no other row grid changes them
+        if len(failures) >= 3 and _agree(failures) and not (slip == "no-slip" and int(err[0]) == 2):
+            break  # three grids stall at one state: a branch end (see _raise); more grids cost, not tell
     v["a_max"] = float(a_m)
     info = {"control": control, "slip": slip, **v}
     if status != K.H_OK:
@@ -250,12 +252,22 @@ def retry_points(points):
     before anything is reported), all within the table's bounds."""
     lo, hi = int(DIMENSIONLESS["points"].lower), int(DIMENSIONLESS["points"].upper)
     out = []
-    for n in (points, points + 1, points + 7, 3 * points // 2 + 1, 2 * points + 1, points // 2 + 3,
-              points // 4 + 5, 4 * points + 3):
+    for n in (points, points + 1, points + 7, 3 * points // 2 + 1, points // 2 + 3, points // 4 + 5):
         n = min(max(n, lo), hi)
         if n not in out:
             out.append(n)
     return tuple(out)
+
+
+def _agree(failures):
+    """Whether every failure is a stall (not a step limit) of the same stage at one locator (to AGREE)."""
+    st, err = failures[0][1], failures[0][2]
+    if st != K.H_FOLLOW or int(err[1]) == 2:
+        return False
+    if not all(f[1] == st and int(f[2][0]) == int(err[0]) and int(f[2][1]) != 2 for f in failures):
+        return False
+    locs = [float(f[2][2]) for f in failures]
+    return max(locs) - min(locs) <= AGREE * max(abs(x) for x in locs)
 
 
 def _locator_name(stage, slip):
@@ -299,9 +311,9 @@ def _raise(failures, v, info, c, pc):
     # a no-slip delamination branch that ends (alpha -> 0) is a history that stops there, not "no
     # solution": a stall there is the engine's failure to finish it, never a DomainError
     branch_may_end = stage == "delamination" and slip == "no-slip"
-    if status == K.H_FOLLOW and same and int(err[1]) != 2 and len(failures) > 1 and not branch_may_end:
+    if status == K.H_FOLLOW and len(failures) > 1 and not branch_may_end:
         locs = [float(f[2][2]) for f in failures]
-        if max(locs) - min(locs) <= AGREE * max(abs(x) for x in locs):
+        if _agree(failures):
             name = _locator_name(stage, slip)
             target = ("before G reaches w (the onset of delamination)" if stage == "pinning"
                       else "before detachment")

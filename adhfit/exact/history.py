@@ -19,6 +19,7 @@ END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
 # shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
+TURN_TOL = 1e-10  # a row counts as past the first turning point when the control has come back up by this
 H_FINAL = 2e-3  # width of the extremum's last stencil, relative to the onset's rho_a (``_extremum``)
 
 
@@ -305,6 +306,21 @@ def _extremum(stage, states, key, sign):
     return min(pts + [states[i]], key=lambda st: sign * key(st))
 
 
+def _first_turn(stage, m, pin, dl, key, sign):
+    """The turning point: where the control variable (sign * key falling) first stops falling on the
+    way out (docs/contracts.md), not its least value over the branch. The end of loading ``m`` when
+    it rises at once; a pinning row when it turns during pinning; else refined on delamination
+    (``_extremum`` over the rows up to just past the first turn). ``pin`` ends with the onset."""
+    seq = [m] + pin + dl
+    vals = [sign * key(s) for s in seq]
+    j = next((i for i in range(len(seq) - 1) if vals[i + 1] > vals[i] + TURN_TOL * (1.0 + abs(vals[i]))),
+             len(seq) - 1)
+    n_on = len(pin)  # index of the onset in seq
+    if j < n_on:
+        return seq[j]
+    return _extremum(stage, seq[n_on:j + 2], key, sign)
+
+
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
                   rs: float, lambda0: float, a_max: float | None = None, delta_max: float | None = None,
                   p_max: float | None = None, points: int = 200, n: int = DEFAULT_N) -> ExactHistory:
@@ -341,9 +357,9 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     dl, stage, ends_at = _delamination(cfg, c, m, on)
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
-    turn = _extremum(stage, [on] + dl, key, sign)
+    turn = _first_turn(stage, m, pin, dl, key, sign)
     fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
-    extra = [s for s in (turn, fmin) if s is not on and all(s is not t for t in dl)]
+    extra = [s for s in (turn, fmin) if all(s is not t for t in mc + pin + dl)]
     dl = sorted(dl + extra, key=lambda s: -s.rho_a)
     out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
     if ends_at is not None:
