@@ -359,6 +359,7 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     sign = -1.0 if control == "displacement" else 1.0
     turn = _first_turn(stage, m, pin, dl, key, sign)
     fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
+    fmin = min([fmin] + pin, key=lambda s: s.f)  # the most negative force of the history (A2), pinning too
     extra = [s for s in (turn, fmin) if all(s is not t for t in mc + pin + dl)]
     dl = sorted(dl + extra, key=lambda s: -s.rho_a)
     out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
