@@ -81,3 +81,15 @@ def test_exact_summary_does_not_depend_on_points(scene):
         for key in ("onset", "f_min", "turning_point"):
             for q in ("f", "p", "a"):
                 assert s[key][q] == pytest.approx(ref[key][q], abs=1e-8), (n, key, q)
+
+
+def test_exact_f_min_is_the_least_force_of_the_history():
+    # audit: f_min reported above a pinning row's force (the search looked at delamination only)
+    sc = dict(control="displacement", slip="no-slip", p=-0.7699527810979117, w=1.7168078585792619,
+              rs=0.35115934066785875, a_max=0.2800773190109454, lambda0=1.937789535932881)
+    try:
+        r = adhfit.simulate(**sc, membrane="exact")
+    except ConvergenceError:
+        pytest.skip("no exact history here")
+    f = r.frame
+    assert r.summary["f_min"]["f"] <= f.f[f.stage != "making_contact"].min() + 1e-12
