@@ -119,6 +119,36 @@ def run_one(args: tuple) -> dict:
     return {**out, "time": elapsed}
 
 
+GRIDS = (10, 11, 50, 200)
+SUMMARY_KEYS = ("onset", "f_min", "turning_point")
+
+
+def points_check(args: tuple) -> dict:
+    """Summary values of one scene at each of GRIDS rows against 1001 rows (worker side): the largest
+    absolute difference of f_max and the (f, p, a) of the onset, f_min and the turning point, or the
+    row counts at which the outcome differs from the 1001-row one."""
+    scene, membrane = args
+    import adhfit
+    from adhfit.errors import AdhfitError
+
+    def summary(n):
+        try:
+            return adhfit.simulate(**scene, points=n, membrane=membrane).summary
+        except AdhfitError as e:
+            return type(e).__name__
+    ref = summary(1001)
+    worst, flips = 0.0, []
+    for n in GRIDS:
+        s = summary(n)
+        if isinstance(s, str) or isinstance(ref, str):
+            if s != ref:
+                flips.append(n)
+            continue
+        worst = max([worst, abs(s["f_max"] - ref["f_max"])]
+                    + [abs(s[k][q] - ref[k][q]) for k in SUMMARY_KEYS for q in ("f", "p", "a")])
+    return {"worst": worst, "flips": flips}
+
+
 def _class_of(detail: str) -> str:
     """A failure's class: its message with the numbers and the inputs dropped."""
     import re
@@ -193,6 +223,14 @@ def markdown(rep: dict) -> str:
     for c in rep["classes"]:
         ex = c["examples"][0]["scene"]
         lines.append(f"| {c['kind']} | {c['class'].replace('|', '/')} | {c['count']} | `{json.dumps(ex)}` |")
+    pc = rep.get("points_check")
+    if pc:
+        lines += ["", "## Summary values against 1001 rows", "",
+                  f"{pc['scenes']} solved scenes re-run at {pc['grids']} rows: the largest difference of f_max and "
+                  f"of (f, p, a) at the onset, f_min and the turning point is {pc['max_abs_diff']:.3g}; "
+                  f"{pc['over_1e-8']} scenes differ by more than 1e-8; {len(pc['outcome_flips'])} change outcome "
+                  "(a history at one row count, an error at another).", ""]
+        lines += [f"- {w['max_abs_diff']:.3g}: `{json.dumps(w['scene'])}`" for w in pc["worst"]]
     return "\n".join(lines) + "\n"
 
 
@@ -205,6 +243,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--other-ends", type=float, default=0.2,
                     help="fraction of scenes ending at delta_max/p_max instead of a_max")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--points-check", type=int, default=0,
+                    help="re-run this many solved scenes at 10, 11, 50, 200 and 1001 rows and compare summaries")
     ap.add_argument("--out", type=Path, default=RESULTS)
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
@@ -212,6 +252,18 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     outs = run(scenes, args.membrane, args.points, args.workers)
     rep = summarize(scenes, outs, args, time.perf_counter() - t0)
+    if args.points_check:
+        picked = [sc for sc, o in zip(scenes, outs) if o["kind"] in ("success", stress.EARLY)][:args.points_check]
+        with mp.get_context("spawn").Pool(args.workers) as pool:
+            checks = pool.map(points_check, [(sc, args.membrane) for sc in picked])
+        worst = [c["worst"] for c in checks]
+        order = np.argsort(worst)[::-1][:KEEP]
+        rep["points_check"] = {
+            "scenes": len(picked), "grids": list(GRIDS), "reference_points": 1001,
+            "max_abs_diff": float(max(worst, default=0.0)),
+            "over_1e-8": int(sum(w > 1e-8 for w in worst)),
+            "outcome_flips": [{"scene": picked[i], "points": c["flips"]} for i, c in enumerate(checks) if c["flips"]],
+            "worst": [{"scene": picked[i], "max_abs_diff": worst[i]} for i in order]}
     args.out.mkdir(parents=True, exist_ok=True)
     stem = f"stress_domain_{args.membrane}"
     (args.out / f"{stem}.json").write_text(json.dumps(rep, indent=1, default=str) + "\n")
