@@ -97,6 +97,49 @@ class ConvergenceError(AdhfitError, RuntimeError):
         super().__init__(f"{what} did not converge" + (f" ({detail})" if detail else ""))
 
 
+class DomainError(ConvergenceError):
+    """No solution exists here: the scene (or a state it asks for) lies beyond a proven end of the model.
+
+    Raised only where the end is proven -- an analytic bound, the branch's own end found along it,
+    or failures that other row grids and the engine's own states agree on -- and never for a solver
+    that merely failed (that is :class:`ConvergenceError`). The message states the bound in words
+    and numbers and closes with what to change, never with "did not converge".
+
+    It subclasses :class:`ConvergenceError` so that every existing ``except ConvergenceError``
+    (retries on another row grid, the fit's "no history at these values") still catches it; catch
+    ``DomainError`` first to tell "no solution exists" from "the solver failed". The command line
+    exits with its own status (``EXIT_DOMAIN`` = 4, docs/contracts.md "Errors and exit statuses").
+
+    Parameters
+    ----------
+    what : str
+        Which end of the model the scene passes, e.g. ``"free membrane past vertical at the clamp"``.
+    bound : str
+        The bound in words and numbers, e.g. ``"a_max <= 0.4132 (the largest Case I contact radius)"``.
+    fix : str
+        What to change, e.g. ``"lower a_max or |p|"``.
+    inputs : dict, optional
+        The dimensionless inputs of the scene.
+    """
+
+    def __init__(self, what: str, bound: str = "", fix: str = "",
+                 inputs: dict[str, Any] | None = None) -> None:
+        self.what = what
+        self.bound = bound
+        self.fix = fix
+        self.inputs = dict(inputs or {})
+        detail = ", ".join(f"{k}={v!r}" for k, v in self.inputs.items())
+        msg = f"no solution exists: {what}"
+        if bound:
+            msg += f"; {bound}"
+        if fix:
+            msg += f"; {fix}"
+        if detail:
+            msg += f" ({detail})"
+        # bypass ConvergenceError's wording ("did not converge"): this is not a solver failure
+        RuntimeError.__init__(self, msg)
+
+
 class DataError(AdhfitError, ValueError):
     """A data or scene file cannot be used as given.
 

@@ -253,8 +253,12 @@ def main(argv: list[str] | None = None) -> int:
         print(str(err).replace("\n", " "), file=sys.stderr)
         return EXIT_INPUT
     except ConvergenceError as err:
+        # DomainError (a ConvergenceError subclass) is "no solution exists here": its own status 4, so a
+        # script can tell it from a solver failure (3); docs/contracts.md "Errors and exit statuses".
+        # Imported here so that this mapping stays the only part of the module it touches.
+        from ..errors import DomainError  # noqa: PLC0415
         print(f"adhfit: {err}".replace("\n", " "), file=sys.stderr)
-        return EXIT_FAILED
+        return 4 if isinstance(err, DomainError) else EXIT_FAILED
     except (AdhfitError, ValueError) as err:
         print(f"adhfit: {err}".replace("\n", " "), file=sys.stderr)
         return EXIT_INPUT

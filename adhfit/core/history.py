@@ -229,8 +229,10 @@ def run(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, end_kappa, end_ta
     ext_stage, ext_loc = np.zeros(2, dtype=np.int64), np.empty(2)
     pin = (PIN_NS if no_slip else PIN_FR, lp, x_pin, True, out_pin)
     dl = (DEL_NS if no_slip else DEL_FR, a_dl, x_dl, no_slip, out_dl)
+    end_obs = out_mc[:, n_mc - 1].copy()
+    end_obs[5] = 0.0  # G at the end of loading (pinning's start)
     if extrema(pressure, pin, dl, kappa_dc, c, w, a_max, L_m, d_fix, onset[0], summary, ext_stage,
-               ext_loc, err):
+               ext_loc, err, end_obs):
         return _fail(H_EXTREMUM, err, a_max)
     cols, counts, tp_pos = assemble(pressure, kappa_dc, d_fix, p_cr, (a_mc, out_mc), (lp, out_pin),
                                     (a_dl, out_dl), summary, ext_stage, ext_loc)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .branches import admissible
+from .branches import PIN_NS, admissible
 from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, extremum
 from .jit import jit
 
@@ -63,20 +63,77 @@ def _best_row(out_pin, out_dl, key, sign):
     return j, best
 
 
+#: a row counts as past the first turning point when the control variable has come back up by more
+#: than this (relative) from the row before it: rows are solved to ~1e-13, a fold moves them by O(h^2)
+TURN_TOL = 1e-10
+
+
+@jit
+def _first_turn(out_pin, out_dl, key, sign, end):
+    """(index in pinning + delamination, value) of the first row after which sign * key falls: the
+    first turning point of the control variable on the way out (docs/contracts.md "turning point").
+    ``end`` is sign * key at the end of loading: when the first row already lies below it, the branch
+    turns at once and the first row is returned (the search between the end of loading and it then
+    finds the end of loading itself)."""
+    n_pin, n_dl = out_pin.shape[1], out_dl.shape[1]
+    n = n_pin + n_dl
+    prev = end
+    for j in range(n):
+        v = sign * (out_pin[key, j] if j < n_pin else out_dl[key, j - n_pin])
+        if v < prev - TURN_TOL * (1.0 + abs(prev)):
+            return max(j - 1, 0), max(prev, v) if j > 0 else v
+        prev = v
+    return n - 1, prev
+
+
+@jit
+def _rises_at_once(pressure, pin, kappa_dc, c, w, a_m, L_m, d_fix, key, sign, end_obs):
+    """Whether the control variable rises as pinning starts: the state at a locator 1e-4 of the first
+    pinning row's has sign * key below the end of loading's (the turning point is then the end of
+    loading itself, whatever the row grid)."""
+    code, locs, xs, implicit, out = pin
+    m = min(2, locs.size)
+    eps = 1e-4 * locs[0]
+    # predictors from pinning's own start (locator 0: x = 1 no slip, a_max frictionless) and its first rows
+    rl, rx, rk = np.empty(m + 1), np.full(m + 1, math.nan), np.empty(m + 1)
+    rl[0], rk[0] = 0.0, end_obs[2]
+    rl[1:], rk[1:] = locs[:m], out[2, :m]
+    if implicit:
+        rx[0] = 1.0 if code == PIN_NS else a_m
+        rx[1:] = xs[:m]
+    st, loc, obs, ok = extremum(code, pressure, eps, eps, rl, rx, rk, 0.0 if pressure else kappa_dc, c,
+                                w, a_m, L_m, d_fix, key, sign, BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER)
+    v0 = sign * end_obs[key]
+    return st == E_OK and admissible(ok, obs) and sign * obs[key] < v0 - TURN_TOL * (1.0 + abs(v0))
+
+
 @jit
 def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, ext_stage, ext_loc,
-            err):
+            err, end_obs):
     """Turning point (e = 0) and force minimum (e = 1) into ``summary``, ``ext_stage`` (1 pinning,
     2 delamination) and ``ext_loc``; returns the status of the failed search (0 if none), with
-    (stage, which, locator, status) in ``err``. ``pin``, ``dl``: (code, locators, x, implicit, obs)."""
+    (stage, which, locator, status) in ``err``. ``pin``, ``dl``: (code, locators, x, implicit, obs);
+    ``end_obs``: the observables at the end of loading (a, alpha, p, d, f, G, ...). The turning
+    point is the first one on the way out (:func:`_first_turn`), f_min the least force of all rows."""
+    tp_lo, tp_hi, tp_st = 0.0, 0.0, -1
     for e in range(2):
         key, sign = ((2, -1.0) if pressure else (3, 1.0)) if e == 0 else (4, -1.0)
-        j, best = _best_row(pin[4], dl[4], key, sign)
+        if e == 0 and _rises_at_once(pressure, pin, kappa_dc, c, w, a_m, L_m, d_fix, key, sign, end_obs):
+            tp_lo, tp_hi, tp_st = 0.0, 0.0, 1
+            ext_stage[0], ext_loc[0] = 1, 0.0
+            summary[S_TP, :] = end_obs[:6]
+            continue
+        if e == 0:
+            j, best = _first_turn(pin[4], dl[4], key, sign, sign * end_obs[key])
+        else:
+            j, best = _best_row(pin[4], dl[4], key, sign)
         stage = 1 if j < pin[1].size else 2
         code, locs, xs, implicit, out = pin if stage == 1 else dl
         i = j if stage == 1 else j - pin[1].size
         lo = locs[i - 1] if i > 0 else (0.0 if stage == 1 else a_on)
         hi = locs[i + 1] if i + 1 < locs.size else locs[i]
+        if e == 0:  # the turning point's bracket: f_min's state may replace it only inside it
+            tp_lo, tp_hi, tp_st = min(lo, hi), max(lo, hi), stage
         loc, obs, st = _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w,
                                a_m, L_m, d_fix, key, sign)
         if st != E_OK:
@@ -86,13 +143,17 @@ def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, e
             # the row itself is better: the search could not re-solve an end of its bracket (the
             # end of a no-slip delamination branch, a fold); the extremum is that row
             loc, obs = locs[i], out[:, i].copy()
+        if e == 0 and sign * end_obs[key] > sign * obs[key]:
+            # the control variable rises at once on the way out: the turning point is the end of
+            # loading itself (pinning's locator 0), and no row after it is stable
+            stage, loc, obs = 1, 0.0, end_obs.copy()
         ext_stage[e], ext_loc[e] = stage, loc
         summary[S_TP if e == 0 else S_FMIN, :] = obs[:6]
     # each is also held against the other's state: next to a fold the other search may be better
     tp, fm = summary[S_TP, :].copy(), summary[S_FMIN, :].copy()
     tp_stage, tp_loc, fm_stage, fm_loc = ext_stage[0], ext_loc[0], ext_stage[1], ext_loc[1]
     k_tp, s_tp = (2, -1.0) if pressure else (3, 1.0)
-    if s_tp * fm[k_tp] > s_tp * tp[k_tp]:
+    if s_tp * fm[k_tp] > s_tp * tp[k_tp] and fm_stage == tp_st and tp_lo <= fm_loc <= tp_hi:
         summary[S_TP, :], ext_stage[0], ext_loc[0] = fm, fm_stage, fm_loc
     if -tp[4] > -fm[4]:
         summary[S_FMIN, :], ext_stage[1], ext_loc[1] = tp, tp_stage, tp_loc

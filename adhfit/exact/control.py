@@ -229,7 +229,11 @@ class _AtP:
 
 
 def _check(name, value, lo, hi, valid, *, lo_open=True, hi_open=True):
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and not math.isnan(value)
+    """The bounds here repeat ``adhfit.params.DIMENSIONLESS`` (this layer may not import it);
+    ``tests/test_domain_params.py`` holds them equal, value by value. ``adhfit.simulate`` validates
+    with the table itself before calling the exact membrane."""
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
+        and not math.isnan(value)
     if ok:
         ok = (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi)
     if not ok:
@@ -246,7 +250,9 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
     _check("w", w, 1e-6, 10.0, "a float in [1e-6, 10]", lo_open=False, hi_open=False)
     _check("rs", rs, 0.02, math.inf, "a float in [0.02, inf] (inf: flat substrate)", lo_open=False,
            hi_open=False)
-    _check("points", points, 9, 100000, "an integer in [10, 100000]")
+    if not isinstance(points, (int, np.integer)) or isinstance(points, bool):
+        raise InputError("points", points, "an integer in [10, 50000]")
+    _check("points", points, 10, 50_000, "an integer in [10, 50000]", lo_open=False, hi_open=False)
     if control == "displacement":
         _check("p", p, -1.0, 1.0, "a float in (-1, 1) under displacement control")
         if p <= -(0.0 if math.isinf(rs) else 1.0 / rs):
@@ -254,6 +260,9 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
         free = _free_at_p(p, lambda0, n)
     else:
         _check("d", d, -1.0, 1.0, "a float in (-1, 1) under pressure control")
+        if 2.0 * d / (1.0 + d * d) <= -(0.0 if math.isinf(rs) else 1.0 / rs):
+            raise InputError("d", d, f"such that 2d/(1+d^2) > -1/rs = {-1.0 / rs:.6g}",
+                             "Contact must start at the substrate apex.")
         free = _free_at_gap(d, lambda0, n)
     given = (("a_max", a_max), ("delta_max", delta_max), ("p_max", p_max))
     ends = [(k, v) for k, v in given if v is not None]
@@ -266,13 +275,14 @@ def prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points
     if a_max is not None:
         _check("a_max", a_max, 1e-3, 0.95, "a float in [1e-3, 0.95] (contact radius over b)",
                lo_open=False, hi_open=False)
-        if not math.isinf(rs) and a_max > 0.95 * rs:
+        if not math.isinf(rs) and a_max >= 0.95 * rs:
             raise InputError("a_max", a_max, f"a float <= 0.95 rs = {0.95 * rs:.6g} (contact on the upper "
                              "hemisphere of the substrate)")
     elif delta_max is not None:
         _check("delta_max", delta_max, 0.0, 2.0, "a float in (0, 2) (displacement over b)")
     else:
-        _check("p_max", p_max, free.p, 1e3, f"a float above the touching pressure {free.p:.6g}")
+        _check("p_max", p_max, -1.0, 5.0, "a number in (-1, 5)")
+        _check("p_max", p_max, free.p, 5.0, f"a float in ({free.p:.6g}, 5): above the touching pressure")
     c = Control(control, slip, p, d, w, rs, lambda0, a_max, int(points), n, free)
     c.end = ends[0]
     c._seen = [(abs(free.p), free.lc)]  # d0(p) continuation starts from the free state

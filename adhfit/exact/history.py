@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import ConvergenceError, InputError
+from ..errors import ConvergenceError, DomainError, InputError
 from .control import Control, prepare
 from .march import PREDICT, vertex
 from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
@@ -19,6 +19,8 @@ END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
 # shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
+TURN_TOL = 1e-10  # a row counts as past the first turning point when the control has come back up by this
+H_FINAL = 2e-3  # width of the extremum's last stencil, relative to the onset's rho_a (``_extremum``)
 
 
 @dataclass
@@ -199,22 +201,53 @@ def _pinning(cfg, c, m):
 
 
 def _delamination(cfg, c, m, on):
+    """Delamination rows from the onset toward detachment: (states, stage, branch end or None).
+
+    A no-slip branch that ends (alpha reaches 0, docs/numerics.md B5) stops at that state and
+    returns its contact radius as the branch end. A march that stops anywhere else is retried on a
+    grid four times finer from where it stopped; if that stops too, the history is not finished and
+    a ConvergenceError says where (never a truncated history labelled as a branch end)."""
     stage = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     g = (1.0 - _cluster(c.n_del)[1:]) ** 1.5
     g[-1] = min(g[-2] * 0.5, 1e-3)
     rho = on.rho_a * g
     states = march(stage, rho, stage.x(on), stop_ok=True)
-    if c.slip == "no-slip":  # past alpha = 0 the membrane would enter the substrate: the branch ends there
+    no_slip = c.slip == "no-slip"
+    if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
         states = states[:next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))]
     if not states:
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
-    if len(states) < len(rho) and c.slip == "no-slip" and states[-1].alpha < 0.2:
+    if len(states) < len(rho) and not (no_slip and states[-1].alpha < 0.2):
+        states = _finish(stage, states, rho, c, no_slip)
+    if len(states) < len(rho) and no_slip and states[-1].alpha < 0.2:
         end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
         last = states[-1]
         x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
         states.append(end.solve(0.0, x))
-    return states, stage
+        return states, stage, states[-1].a
+    return states, stage, None
+
+
+def _finish(stage, states, rho, c, no_slip):
+    """Retry a delamination march that stopped early on a four times finer grid from its last state;
+    raise a ConvergenceError naming where it stopped if that fails too."""
+    k = len(states)
+    fine = [states[-1].rho_a] + list(rho[k:])
+    rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
+    more = march(stage, rest, stage.x(states[-1]), stop_ok=True)
+    if no_slip:
+        more = more[:next((i for i, s in enumerate(more) if s.alpha < 0.0), len(more))]
+    kept = more[3::4]  # the history's own rows (every fourth value of the finer grid)
+    if len(more) == len(rest):
+        return states + kept
+    if no_slip and more and more[-1].alpha < 0.2:  # the branch end, reached on the finer grid
+        return states + kept + ([] if kept and kept[-1] is more[-1] else [more[-1]])
+    last = (more or states)[-1]
+    raise ConvergenceError(f"exact delamination ({c.slip}): the march stopped at a = {last.a:.6g} "
+                           f"(alpha = {last.alpha:.4g}) before detachment, on the history's grid and "
+                           "on one four times finer",
+                           {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max, "control": c.control})
 
 
 def _vertex(x, y, c, h):
@@ -241,8 +274,13 @@ def _extremum(stage, states, key, sign):
     c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
     c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
     vs, xs = [st.rho_a for st in states[j0:j1]][::-1], [stage.x(st) for st in states[j0:j1]][::-1]
-    pts = []
-    for _ in range(3):
+    # the final stencil's width: small enough that the quartic's O(h^4) bias is ~1e-12, large enough
+    # that states solved to EXTREMUM_TOL locate the vertex to ~1e-10 (both measured against 1001 rows)
+    h_min = H_FINAL * states[0].rho_a
+    if h < h_min and lo + 2 * h_min < hi - 2 * h_min:
+        h = h_min
+    pts, found = [], None
+    for _ in range(6):
         grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
         pts = stage.path(grid, vs, xs, xs[-1], tol=EXTREMUM_TOL)
         if len(pts) < len(grid):
@@ -251,10 +289,36 @@ def _extremum(stage, states, key, sign):
         if v is None:
             break
         if abs(v - c) <= 1.5 * h:
-            fin = stage.path([v], grid, [stage.x(st) for st in pts], xs[-1], tol=EXTREMUM_TOL)
-            return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
+            found = (v, grid, pts)
+            if h <= h_min:
+                break
+            # the stencil's vertex is off by O(h^4): shrink the stencil around it, so the summary's other
+            # quantities (linear in the locator there) do not depend on the row spacing
+            c, h = v, max(0.1 * h, h_min)
+            c = min(max(c, lo + 2 * h), hi - 2 * h)
+            vs, xs = grid, [stage.x(st) for st in pts]
+            continue
         c = min(max(v, lo + 2 * h), hi - 2 * h)
+    if found is not None:
+        v, grid, pts = found
+        fin = stage.path([v], grid, [stage.x(st) for st in pts], stage.x(pts[2]), tol=EXTREMUM_TOL)
+        return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
     return min(pts + [states[i]], key=lambda st: sign * key(st))
+
+
+def _first_turn(stage, m, pin, dl, key, sign):
+    """The turning point: where the control variable (sign * key falling) first stops falling on the
+    way out (docs/contracts.md), not its least value over the branch. The end of loading ``m`` when
+    it rises at once; a pinning row when it turns during pinning; else refined on delamination
+    (``_extremum`` over the rows up to just past the first turn). ``pin`` ends with the onset."""
+    seq = [m] + pin + dl
+    vals = [sign * key(s) for s in seq]
+    j = next((i for i in range(len(seq) - 1) if vals[i + 1] > vals[i] + TURN_TOL * (1.0 + abs(vals[i]))),
+             len(seq) - 1)
+    n_on = len(pin)  # index of the onset in seq
+    if j < n_on:
+        return seq[j]
+    return _extremum(stage, seq[n_on:j + 2], key, sign)
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
@@ -289,18 +353,42 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     cfg = Config(c.lambda0, c.crv, c.n)
     mc, m = _loading(cfg, c)
     pin, on = _pinning(cfg, c, m)
-    dl, stage = _delamination(cfg, c, m, on)
+    _check_compressive(c, mc, m)
+    dl, stage, ends_at = _delamination(cfg, c, m, on)
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
-    turn = _extremum(stage, [on] + dl, key, sign)
+    turn = _first_turn(stage, m, pin, dl, key, sign)
     fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
-    extra = [s for s in (turn, fmin) if s is not on and all(s is not t for t in dl)]
+    fmin = min([fmin] + pin, key=lambda s: s.f)  # the most negative force of the history (A2), pinning too
+    extra = [s for s in (turn, fmin) if all(s is not t for t in mc + pin + dl)]
     dl = sorted(dl + extra, key=lambda s: -s.rho_a)
     out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
-    if dl[-1].a > 2e-3 * c.a_max:
-        # the quasi-static branch ends at a finite contact radius (detachment from there is dynamic)
-        out.inputs["delamination_ends_at_a"] = dl[-1].a
+    if ends_at is not None:
+        # the no-slip quasi-static branch ends at a finite contact radius (detachment from there is dynamic)
+        out.inputs["delamination_ends_at_a"] = ends_at
     return out
+
+
+def _check_compressive(c, mc, m):
+    """The exact membrane's own domain check: without adhesion the substrate can only push, so the
+    contact force of every making-contact state (the end of loading included) must be compressive.
+    A tensile one means the free membrane is more concave at its apex than the substrate (its apex
+    curvature p / (1 - lambda_c^-6) below -1/rs, a stricter bound than the large-stretch p > -1/rs):
+    contact would not start at the apex, outside the model."""
+    bad = [s for s in mc[1:] if not s.f > 0.0]
+    if not bad:
+        return
+    crv = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
+    where = "pressure p" if c.control == "displacement" else "gap d"
+    raise DomainError("the adhesionless contact force is tensile while making contact (the exact "
+                      "membrane's apex is more concave than the substrate, so contact would not start "
+                      "at the apex)",
+                      f"f = {m.f:.6g} at the end of loading (a_max = {c.a_max:.6g}), f = {bad[0].f:.6g} "
+                      f"at a = {bad[0].a:.6g}; it must be > 0 (the free apex curvature must exceed "
+                      f"-1/rs = {crv:.6g})",
+                      f"raise the {where}, or lambda0 = {c.lambda0:g}",
+                      {"control": c.control, "slip": c.slip, "rs": c.rs, "lambda0": c.lambda0,
+                       **({"p": c.p} if c.control == "displacement" else {"d": c.d})})
 
 
 def _row(st, delta):
