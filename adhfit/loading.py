@@ -11,13 +11,13 @@ Everything here is dimensionless (docs/contracts.md A1); no pandas.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 
 from .core.inflation import apex_deflection, critical_pressure
 from .errors import ConvergenceError, DomainError, InputError
+from .histories import History
 from .params import A_MAX_OVER_RS, DIMENSIONLESS, check_scene
 
 __all__ = ["History", "history", "state_at", "STAGES", "COLUMNS"]
@@ -28,32 +28,6 @@ COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 A_END = 1e-3
 _KEYS = ("a", "alpha", "p", "d", "f", "G")
 _STAGE_LABELS = np.array(STAGES, dtype=object)
-
-
-@dataclass(frozen=True)
-class History:
-    """A dimensionless loading history.
-
-    Attributes
-    ----------
-    columns : dict of str -> ndarray
-        ``stage`` (str array) and ``a, alpha, p, d, delta, f, G`` (float; ``delta`` NaN where
-        |p| > 1) and ``stable`` (bool), in history order.
-    summary : dict
-        ``f_max``, ``onset``, ``f_min``, ``turning_point`` (docs/contracts.md A2 ``--json``).
-    inputs : dict
-        The validated inputs, with the resolved ``a_max``.
-    counts : tuple of int
-        Rows of making contact (with the free-inflation row), pinning and delamination; empty when
-        not known (read the ``stage`` column).
-    """
-
-    columns: dict
-    summary: dict
-    inputs: dict = field(default_factory=dict)
-    counts: tuple = ()
-
-
 
 
 class _Kernels:

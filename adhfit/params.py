@@ -204,7 +204,6 @@ CONTROLS = ("displacement", "pressure")
 SLIP_CONDITIONS = ("no-slip", "frictionless")
 #: slip choices of a scene or a fit: ``auto`` fits both conditions and compares them
 SLIP_CHOICES = ("auto", *SLIP_CONDITIONS)
-#: membrane models of a fit (docs/contracts.md A6): ``auto`` picks the one the data need
-MEMBRANE_CHOICES = ("auto", "large-stretch", "exact")
+# membrane models: adhfit.membranes.MEMBRANES (one entry each) and its membrane_choices()
 #: fitting methods
 METHODS = ("lsq", "mcmc")

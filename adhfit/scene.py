@@ -17,7 +17,8 @@ from typing import Any, Mapping
 import numpy as np
 
 from .errors import DataError, InputError, clip, shown
-from .params import A_MAX_OVER_RS, CONTROLS, DIMENSIONLESS, FITTED, MEMBRANE_CHOICES, SLIP_CHOICES
+from .membranes import membrane_choices
+from .params import A_MAX_OVER_RS, CONTROLS, DIMENSIONLESS, FITTED, SLIP_CHOICES
 from .units import DIMENSIONS, GROUPS, Scales, parse_quantity
 
 __all__ = ["Scene", "load_scene", "normalize_priors", "CONTROLS", "SLIPS", "MEMBRANE_MODELS", "LAYOUT", "PRIOR_DISTS"]
@@ -30,7 +31,7 @@ MAX_SCENE_BYTES = 1_000_000
 PLAIN_LENGTH_MAX = 0.1
 
 SLIPS = SLIP_CHOICES
-MEMBRANE_MODELS = MEMBRANE_CHOICES  # of a fit (docs/contracts.md A6)
+MEMBRANE_MODELS = membrane_choices()  # of a fit (docs/contracts.md A6); checked against the registry as it is
 
 #: TOML layout (docs/contracts.md A3): section -> key -> (Scene field, dimension or None for a word).
 LAYOUT: dict[str, dict[str, tuple[str, str | None]]] = {
@@ -114,7 +115,7 @@ class Scene:
 
     def __post_init__(self) -> None:
         set_ = functools.partial(object.__setattr__, self)  # frozen: normalise fields in place
-        for key, choices in (("control", CONTROLS), ("slip", SLIPS), ("membrane_model", MEMBRANE_MODELS)):
+        for key, choices in (("control", CONTROLS), ("slip", SLIPS), ("membrane_model", membrane_choices())):
             if getattr(self, key) not in choices:
                 raise InputError(key, getattr(self, key), "one of " + ", ".join(map(repr, choices)))
         for key, dim in _DIMENSION.items():

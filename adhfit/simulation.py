@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from .errors import InputError
-from .loading import COLUMNS, History, history
+from . import membranes
+from .loading import COLUMNS
 from .params import check_scene
 
 __all__ = ["SimulationResult", "simulate"]
@@ -79,21 +79,12 @@ def simulate(control: str, slip: str, *, p: float | None = None, d: float | None
     >>> round(r.summary["f_max"], 4)
     0.5105
     """
-    if membrane not in ("large-stretch", "exact"):
-        raise InputError("membrane", membrane, "'large-stretch' or 'exact'")
+    model = membranes.membrane(membrane)
     # one validation of every shared setting, from the one parameter table, whichever engine runs
     check_scene(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max, p_max=p_max,
                 lambda0=lambda0, points=points)
-    if membrane == "exact":
-        from .exact.history import exact_history  # noqa: PLC0415 - the exact model loads on demand
-        h = exact_history(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max,
-                          p_max=p_max, lambda0=lambda0, points=points)
-        frame = pd.DataFrame({k: h.columns[k] for k in COLUMNS})
-        return SimulationResult(frame=frame, summary=h.summary, inputs=h.inputs)
-    if membrane != "large-stretch":
-        raise InputError("membrane", membrane, "'large-stretch' or 'exact'")
-    h: History = history(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max,
-                         p_max=p_max, lambda0=lambda0, points=points)
+    h = model.history(control, slip, p=p, d=d, w=w, rs=rs, a_max=a_max, delta_max=delta_max, p_max=p_max,
+                      lambda0=lambda0, points=points)
     frame = pd.DataFrame({k: h.columns[k] for k in COLUMNS})
     return SimulationResult(frame=frame, summary=h.summary, inputs=h.inputs)
 

@@ -19,7 +19,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "adhfit"
 #: (prefix, layer): the first matching prefix decides (longest prefixes first)
 LAYERS = [("adhfit.cli", 7), ("adhfit.report", 6), ("adhfit.fitting", 5),
           ("adhfit.scene", 4), ("adhfit.data", 4), ("adhfit.readers", 4), ("adhfit.physical", 4),
-          ("adhfit.loading", 3), ("adhfit.simulation", 3), ("adhfit.units", 3), ("adhfit.params", 3),
+          ("adhfit.loading", 3), ("adhfit.simulation", 3), ("adhfit.membranes", 3), ("adhfit.histories", 2), ("adhfit.units", 3), ("adhfit.params", 3),
           ("adhfit.core", 2), ("adhfit.exact", 2),
           ("adhfit.errors", 1)]
 
@@ -168,7 +168,7 @@ def test_one_engine():
                 kernels.add(_module(path).split(".")[1])
     assert kernels == {"core", "exact"}
     loading = {t for t, _ in GRAPH["adhfit.loading"]}
-    assert {t.split(".")[1] for t in loading} <= {"core", "errors", "params"}
+    assert {t.split(".")[1] for t in loading} <= {"core", "errors", "params", "histories"}
 
 
 @pytest.mark.parametrize("module", ["adhfit.fitting.api", "adhfit.fitting.stage", "adhfit.fitting.sampling"])

@@ -148,3 +148,29 @@ def test_read_curve_is_public():
     assert c.control == "displacement" and len(c.x) == len(c.force) > 10
     model = CurveModel(c, adhfit.load_scene("sample_data/fea_displacement_no-slip/scene.toml"), "no-slip")
     assert model.force.size == len(c.x) and "contact_radius" in OBSERVABLES
+
+
+def test_a_toy_membrane_is_one_registry_entry(monkeypatch):
+    """A new membrane model is one entry of adhfit.membranes.MEMBRANES: simulate, the scene file's choice,
+    the fit's choice and the fit's model all find it by name (here a stand-in whose forces are the
+    large-stretch ones x 1.1)."""
+    from adhfit import membranes
+    from adhfit.histories import History
+    base = membranes.MEMBRANES["large-stretch"]
+
+    def stiffer(control, slip, **kw):
+        h = base.history(control, slip, **kw)
+        return History({**h.columns, "f": 1.1 * h.columns["f"]}, h.summary, h.inputs, h.counts)
+    monkeypatch.setitem(membranes.MEMBRANES, "toy", membranes.Membrane("toy", "a test stand-in", stiffer, False))
+    kw = dict(p=0.6, w=0.2, rs=0.5, a_max=0.25)
+    toy, ref = (adhfit.simulate("displacement", "no-slip", **kw, membrane=m) for m in ("toy", "large-stretch"))
+    np.testing.assert_allclose(toy.frame["f"], 1.1 * ref.frame["f"], rtol=1e-12)
+    scene = _ls_scene(membrane_model="toy", slip="no-slip")
+    series = synthetic_series(_ls_scene(), "no-slip", pressures=(1200.0,), **TRUE, x_max=6e-4, noise=0.005,
+                              radius_noise=None, rows=80, rng=np.random.default_rng(9))
+    r = adhfit.fit(series[0][0], scene, profile=False)
+    assert r.model["membrane"] == "toy" and r.provenance["options"]["membrane"] == "toy"
+    # the toy's forces are 10 % above the curve's model: μh comes out about 10 % low
+    assert r.parameters["mu_h"].value == pytest.approx(TRUE["mu_h"] / 1.1, rel=0.03)
+    with pytest.raises(adhfit.InputError, match="membrane"):
+        adhfit.simulate("displacement", "no-slip", **kw, membrane="nonesuch")

@@ -10,9 +10,10 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..fitting.options import DEFAULT_POINTS
-from ..params import MEMBRANE_CHOICES, METHODS, SLIP_CHOICES
+from ..membranes import membrane_choices
+from ..params import METHODS, SLIP_CHOICES
 
-__all__ = ["add_fit_arguments", "read_options", "fit_x_offset", "fit_force_offset", "MEMBRANE_CHOICES"]
+__all__ = ["add_fit_arguments", "read_options", "fit_x_offset", "fit_force_offset"]
 
 
 def _seed(text: str) -> int:
@@ -92,7 +93,7 @@ def add_fit_arguments(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit the displacement offset (displacement control)")
     p.add_argument("--pressure-offset", action="store_true", help="fit a pressure offset (pressure control)")
-    p.add_argument("--membrane", choices=MEMBRANE_CHOICES, default=None,
+    p.add_argument("--membrane", choices=membrane_choices(), default=None,
                    help="membrane model: large-stretch (the paper's), exact (neo-Hookean, slower), auto (exact "
                         "where the data resolve the difference); default: the scene's [membrane] model (auto)")
     p.add_argument("--points", type=_points, default=DEFAULT_POINTS, help="rows per computed history")

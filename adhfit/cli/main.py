@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 from ..errors import AdhfitError, ConvergenceError
+from ..membranes import membrane_choices
 from ..params import DIMENSIONLESS
 
 __all__ = ["main"]
@@ -107,7 +108,7 @@ def _simulate_parser(sub) -> None:
     end.add_argument("--p-max", type=_end("p-max"), help=T["p_max"].description + unit.format("'1.6 kPa'"))
     p.add_argument("--lambda0", type=_number("lambda0"), default=None, help="pre-stretch (default 2)")
     p.add_argument("--points", type=_integer("points"), default=200, help="approximate number of rows")
-    p.add_argument("--membrane", choices=("large-stretch", "exact"), default="large-stretch",
+    p.add_argument("--membrane", choices=membrane_choices(auto=False), default="large-stretch",
                    help="membrane model: the paper's large-stretch closed forms (default) or the exact "
                         "neo-Hookean membrane (lambda0 then matters)")
     p.add_argument("-o", "--output", type=Path, help="write the history as CSV")

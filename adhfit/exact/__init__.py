@@ -7,7 +7,7 @@ Modules: ``kernels`` (compiled ODEs and integrator), ``state`` (one shot), ``new
 stage problems), ``control`` (inputs), ``inflation`` (free inflation), ``history``; ``jit`` keys the
 numba cache of all of them on one hash of ``adhfit/exact``.
 """
-from .history import ExactHistory, exact_history
+from .history import exact_history
 from .inflation import apex_deflection, free_inflation
 
-__all__ = ["ExactHistory", "exact_history", "apex_deflection", "free_inflation"]
+__all__ = ["exact_history", "apex_deflection", "free_inflation"]

@@ -2,18 +2,18 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ConvergenceError, DomainError, InputError
+from ..histories import History
 from .control import Control, prepare
 from .march import PREDICT, vertex
 from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
-__all__ = ["ExactHistory", "exact_history", "COLUMNS"]
+__all__ = ["exact_history", "COLUMNS"]
 
 END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
@@ -21,16 +21,6 @@ EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extre
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 TURN_TOL = 1e-10  # a row counts as past the first turning point when the control has come back up by this
 H_FINAL = 2e-3  # width of the extremum's last stencil, relative to the onset's rho_a (``_extremum``)
-
-
-@dataclass
-class ExactHistory:
-    """Same attributes as ``adhfit.loading.History``: ``columns``, ``summary``, ``inputs``."""
-
-    columns: dict
-    summary: dict
-    inputs: dict = field(default_factory=dict)
-    states: list = field(default_factory=list, repr=False)
 
 
 def _cluster(n):
@@ -323,7 +313,7 @@ def _first_turn(stage, m, pin, dl, key, sign):
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
                   rs: float, lambda0: float, a_max: float | None = None, delta_max: float | None = None,
-                  p_max: float | None = None, points: int = 200, n: int = DEFAULT_N) -> ExactHistory:
+                  p_max: float | None = None, points: int = 200, n: int = DEFAULT_N) -> History:
     """Compute a full history of the exact neo-Hookean membrane (docs/contracts.md A2 columns).
 
     Parameters
@@ -338,7 +328,7 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
 
     Returns
     -------
-    ExactHistory
+    adhfit.histories.History
         ``columns`` (the A2 columns as arrays), ``summary`` (the A2 ``--json`` object), ``inputs``.
 
     Raises
@@ -409,4 +399,4 @@ def _assemble(c, mc, pin, dl, m, on, turn, fmin):
     at = {id(s): i for i, (_, s) in enumerate(rows)}  # the summary's delta: its row's (no new d0 solve)
     summary = {"f_max": m.f, **{k: _row(s, cols["delta"][at[id(s)]])
                                 for k, s in (("onset", on), ("f_min", fmin), ("turning_point", turn))}}
-    return ExactHistory(cols, summary, c.inputs(), [s for _, s in rows])
+    return History(cols, summary, c.inputs(), states=[s for _, s in rows])

@@ -63,7 +63,7 @@ def _warnings(problem, stage, rep: SlipFit) -> list[str]:
     """Plain sentences for a lab user (docs/contracts.md A5b)."""
     v, info = stage.verdict, stage.model
     out = list(problem.checks)
-    if info["membrane"] != "exact":
+    if info["membrane"] == "large-stretch":
         notes = [effect_warning(eff, v["parameters_from"], sc.prestretch)
                  for eff, sc in zip(stage.effects, problem.scenes)]
         notes = [n for n in notes if n]

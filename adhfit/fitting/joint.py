@@ -150,7 +150,7 @@ def objective_fit(slip: str, singles: list[RawFit], curves: list, segs: list, si
     starts = [_mean_start(singles)] + [{k: r.par.si(r.best.params)[k] for k in _LN} for r in singles]
     # an exact history costs ~10x a large-stretch one: its members start at their own exact optima, and
     # 1e-5 of χ² is far below what the intervals and the slip comparison need (see .membrane EXACT_TOL)
-    fine = EXACT_TOL if any(m.model.membrane == "exact" for m in members) else FINE_TOL
+    fine = EXACT_TOL if any(m.model.membrane != "large-stretch" for m in members) else FINE_TOL
     best = _minimise_starts(objective_residual(members, spar), spar, starts, offsets, fine)
     fit = ObjectiveFit(slip, members, spar, best, given, joint=True)
     for _ in range(MAX_REWEIGHT):

@@ -36,7 +36,7 @@ from .model import CurveModel, ModelDomainError
 from .starts import Start, noise_estimate
 
 __all__ = ["Effect", "approximation_effect", "decide", "FORCE_THRESHOLD", "SHIFT_THRESHOLD", "EXACT_POINTS",
-           "choose_and_refit", "choose_members", "exact_refit", "wants_profile", "effect_warning",
+           "choose_and_refit", "choose_members", "exact_refit", "refit", "wants_profile", "effect_warning",
            "membrane_evidence", "MEMBRANE_DBIC", "shift_text"]
 
 #: largest force error, in units of the noise σ, that ``auto`` accepts from the approximation
@@ -137,6 +137,8 @@ def decide(effects: dict[str, Effect], lambda0: float, requested: str, outside: 
         Slip conditions whose large-stretch optimum lies outside the exact membrane's domain (no Case I
         history there): the approximation is off by more than any data resolve.
     """
+    if requested not in ("auto", "large-stretch", "exact"):  # another registry model: fitted as asked
+        return {"membrane": requested, "why": f"{requested} requested (λ0 = {lambda0:g})."}
     if outside and requested != "exact":
         where = (f"at λ0 = {lambda0:g} the exact membrane has no history at the large-stretch optimum "
                  f"({', '.join(outside)}): the approximation is far off there, beyond what any data resolve")
@@ -200,8 +202,9 @@ DOMAIN_STEPS = (1.25, 1.6, 2.0, 2.5, 3.2, 4.0)
 SPLIT_ROUNDS = 4
 
 
-def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
-    """The exact-membrane least-squares fit of one slip condition, started from ``raw`` (large-stretch).
+def exact_refit(raw: RawFit, effect: Effect | None, membrane: str = "exact") -> RawFit:
+    """The exact-membrane (or another registry model's) least-squares fit of one slip condition, started
+    from ``raw`` (large-stretch).
 
     Parameters
     ----------
@@ -209,10 +212,12 @@ def exact_refit(raw: RawFit, effect: Effect | None) -> RawFit:
         The large-stretch fit of this slip condition.
     effect : Effect, optional
         Its approximation effect; its corrected start is used when given.
+    membrane : str
+        The model to fit (:data:`adhfit.membranes.MEMBRANES`).
     """
     m, par = raw.model, raw.par
     exact = CurveModel(m.curve, m.scene, m.slip, points=EXACT_POINTS, segments=m.segments,
-                       fixed_split=m.fixed_split, membrane="exact")
+                       fixed_split=m.fixed_split, membrane=membrane)
     exact.n_histories, exact.n_evaluations = m.n_histories, m.n_evaluations
     sigma_est = raw.scale if raw.sigma_given else (noise_estimate(m.force) or 1e-3 * par.f_scale)
     residual = residual_function(exact, par, raw.scale, sigma_est)
@@ -251,7 +256,7 @@ def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given:
     (W_ad 9 % low); following the exact row alone settled one row early (W_ad 2.6 % low at 1 % noise)."""
     par = residual_args[0]
     free = CurveModel(exact.curve, exact.scene, exact.slip, points=exact.points, segments=exact.segments,
-                      membrane="exact")
+                      membrane=exact.membrane)
     seen, moved = {exact.segments.i_jump}, False
     for _ in range(SPLIT_ROUNDS):
         si, cur = par.si(best.params), exact.segments.i_jump
@@ -278,7 +283,7 @@ def _split_fit(exact: CurveModel, j: int, best, residual_args: tuple, sigma_give
     """The exact fit with the detachment fixed before row ``j``, from ``best``'s parameters."""
     par = residual_args[0]
     model = CurveModel(exact.curve, exact.scene, exact.slip, points=exact.points, fixed_split=True,
-                       segments=exact.segments.split_before(j, exact.force), membrane="exact")
+                       segments=exact.segments.split_before(j, exact.force), membrane=exact.membrane)
     model.n_histories, model.n_evaluations = exact.n_histories, exact.n_evaluations
     res = minimise(residual_function(model, *residual_args), best.params, scale_covar=not sigma_given,
                    max_nfev=MAX_NFEV, tol=EXACT_TOL)
@@ -343,10 +348,17 @@ def choose_and_refit(raws: dict[str, RawFit], scene, membrane: str) -> tuple[dic
         except (AdhfitError, ValueError):
             continue
     model = decide(effects, scene.prestretch, membrane, tuple(outside))
-    if model["membrane"] != "exact":
+    if model["membrane"] == "large-stretch":
         return raws, model, effects
-    out = {s: exact_refit(raw, effects.get(s)) for s, raw in raws.items()}
+    out = {s: refit(raw, effects.get(s), model["membrane"]) for s, raw in raws.items()}
     return out, model, effects
+
+
+def refit(raw: RawFit, effect: Effect | None, membrane: str) -> RawFit:
+    """The fit of one slip condition with ``membrane`` (a registry entry), refined from the large-stretch
+    fit ``raw``: the exact membrane from the start its approximation effect predicts, another model from
+    the large-stretch optimum."""
+    return exact_refit(raw, effect if membrane == "exact" else None, membrane=membrane)
 
 
 def effect_warning(effects: dict[str, Effect], slip: str, lambda0: float) -> str | None:
@@ -376,11 +388,12 @@ def choose_members(raws: dict[str, list[RawFit]], scenes: list, membrane: str) -
     slips = list(raws)
     n = len(scenes)
     per = [choose_and_refit({s: raws[s][i] for s in slips}, scenes[i], membrane) for i in range(n)]
-    exact = [k for k, (_, info, _) in enumerate(per) if info["membrane"] == "exact"]
+    exact = [k for k, (_, info, _) in enumerate(per) if info["membrane"] != "large-stretch"]
+    chosen = per[exact[0]][1]["membrane"] if exact else "large-stretch"
     out = {s: [] for s in slips}
     for i, (fits, info, effects) in enumerate(per):
-        if exact and info["membrane"] != "exact":
-            fits = {s: exact_refit(raws[s][i], effects.get(s)) for s in slips}
+        if exact and info["membrane"] != chosen:
+            fits = {s: refit(raws[s][i], effects.get(s), chosen) for s in slips}
         for s in slips:
             out[s].append(fits[s])
     info = dict(per[exact[0] if exact else 0][1])
@@ -389,7 +402,7 @@ def choose_members(raws: dict[str, list[RawFit]], scenes: list, membrane: str) -
         info["why"] = (f"one membrane model for the {n} curves; curve {which + 1} ({scenes[which].source or 'scene'}): "
                        + info["why"])
         if exact:
-            info["membrane"] = "exact"
+            info["membrane"] = chosen
     return out, info, [p[2] for p in per]
 
 
@@ -400,7 +413,7 @@ def wants_profile(fit, model: dict) -> bool:
     pull-off (W_ad is then bounded from one side) or when the optimum sits on the kink at the turning
     point (docs/numerics.md B4)."""
     from .intervals import no_pull_off  # noqa: PLC0415
-    if model["membrane"] != "exact" or fit.best.covar is None:
+    if model["membrane"] == "large-stretch" or fit.best.covar is None:
         return True
     for name in ("ln_work_of_adhesion", "ln_mu_h"):  # a wide or missing covariance interval is not trusted
         se = fit.best.params[name].stderr

@@ -42,8 +42,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import membranes
 from ..errors import AdhfitError, InputError
-from ..loading import history
 from ..params import SLIP_CONDITIONS
 from .options import DEFAULT_POINTS
 from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
@@ -212,8 +212,7 @@ class CurveModel:
         if curve.control != scene.control:
             raise InputError("control", curve.control, f"'{scene.control}' (the scene's control mode)")
         self.curve, self.scene, self.slip, self.points = curve, scene, slip, int(points)
-        if membrane not in ("large-stretch", "exact"):
-            raise InputError("membrane", membrane, "'large-stretch' or 'exact'")
+        self._engine = membranes.membrane(membrane)  # one clear error for an unknown model
         self.control, self.membrane = scene.control, membrane
         self.segments = segments if segments is not None else segment(curve)
         self.x = np.asarray(curve.x, float)
@@ -295,11 +294,8 @@ class CurveModel:
         return pcs
 
     def _history(self, kw: dict, points: int):
-        """One history as arrays (no table): the large-stretch engine or the exact membrane."""
-        if self.membrane == "exact":
-            from ..exact.history import exact_history  # noqa: PLC0415 - the exact model loads on demand
-            return exact_history(**kw, points=points)
-        return history(**kw, points=points)
+        """One history as arrays (no table), from the membrane model's registry entry."""
+        return self._engine.history(**kw, points=points)
 
     def dimensionless_x(self, mu_h: float, x_offset: float, x: np.ndarray | None = None) -> np.ndarray:
         """The measured control values (or ``x``) as δ/b or p (with the offset)."""

@@ -9,9 +9,10 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 from ..errors import InputError
-from ..params import MEMBRANE_CHOICES, METHODS, SLIP_CHOICES
+from ..membranes import membrane_choices
+from ..params import METHODS, SLIP_CHOICES
 
-__all__ = ["METHODS", "SLIP_CHOICES", "MEMBRANE_CHOICES", "DEFAULT_POINTS", "MCMC_SETTINGS", "FitOptions"]
+__all__ = ["METHODS", "SLIP_CHOICES", "DEFAULT_POINTS", "MCMC_SETTINGS", "FitOptions"]
 
 #: rows per computed history: interpolation error ~1e-4 of the largest force (see .model)
 DEFAULT_POINTS = 150
@@ -97,7 +98,7 @@ class FitOptions:
         if self.slip is not None:
             _choice("slip", self.slip, SLIP_CHOICES)
         if self.membrane is not None:
-            _choice("membrane", self.membrane, MEMBRANE_CHOICES)
+            _choice("membrane", self.membrane, membrane_choices())
         _positive("sigma", self.sigma, "N")
         _positive("sigma_contact_radius", self.sigma_contact_radius, "m")
         if not (isinstance(self.points, int) and not isinstance(self.points, bool) and 40 <= self.points <= 5000):
