@@ -1,0 +1,219 @@
+"""Slip-verdict calibration: how often each evidence word of the slip verdict is wrong (issue 20).
+
+Seeded replicate curves of the recovery study's cases (``recovery_cases.py``: both controls x curved /
+flat substrate, both true slips) at several noise levels, clean, with a drifting load-cell zero, and
+stopped early, are written to CSV and fitted as a user would (``adhfit.fit(path, scene, slip="auto")``,
+default options).  Every fit records the true slip, the favoured slip, the evidence word, ΔBIC and
+whether a slip was selected; ``verdict_stats.py`` counts, per word, the uses and the wrong ones with a
+Clopper-Pearson bound, overall, per noise level, per variant and per case.  The promise checked:
+"very strong" wrong in <= 1 % of its uses, "strong" in <= 5 %.
+
+Every fit has its own seed, ``SeedSequence(--seed, spawn_key=(case, slip, variant, noise in 1e-4,
+replicate))`` (``recovery.seed_sequence``), so a fit's curve does not depend on the selection, the order
+or the worker count.  Records are appended to ``OUT.partial.jsonl`` as they complete; ``--resume`` runs
+only the fits missing there, ``--from-records`` only makes the report.
+
+Usage (from the repository root)::
+
+    python benchmarks/verdict_calibration.py [--replicates 10] [--replicates-variants 2]
+        [--noise 0.005 0.01 0.02 0.03 0.05] [--variants clean drift trunc-turn ...] [--cases ...]
+        [--slips ...] [--rows 200] [--seed 20261204] [--workers 2] [--resume | --from-records FILE]
+        [--out benchmarks/results/verdict_calibration]
+
+Writes ``OUT.json`` (every fit and every table) and ``OUT.md``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import recovery  # noqa: E402
+import recovery_cases as rc  # noqa: E402
+import verdict_stats as vs  # noqa: E402
+
+NOISES = (0.005, 0.01, 0.02, 0.03, 0.05)
+VARIANTS = ("clean", "drift", "trunc-turn", "trunc-pinning", "trunc-delamination")
+SEED = 20261204
+KEY = ("case", "slip", "variant", "noise", "rep")
+
+
+def plan(args) -> list[dict]:
+    """Every fit to run: ``--replicates`` per clean cell, ``--replicates-variants`` per cell of another
+    variant, at every noise level; ordered so that any prefix of the run is balanced over the cells."""
+    jobs = []
+    for case in args.cases:
+        for slip in args.slips:
+            for variant in args.variants:
+                if not rc.applicable(case, slip, variant):
+                    continue
+                n = args.replicates if variant == "clean" else args.replicates_variants
+                jobs += [{"case": case, "slip": slip, "variant": variant, "noise": noise, "rep": k,
+                          "seed": args.seed, "rows": args.rows, "_order": k / n}
+                         for noise in args.noise for k in range(n)]
+    jobs.sort(key=lambda j: j["_order"])
+    for j in jobs:
+        del j["_order"]
+    return jobs
+
+
+def run_one(job: dict) -> dict:
+    """Make, write and fit one curve; the slip verdict against the true slip."""
+    ss = recovery.seed_sequence(job["seed"], job["case"], job["slip"], job["variant"], job["noise"], job["rep"])
+    rec = dict(job, spawn_key=list(ss.spawn_key), error=None)
+    from adhfit import fit  # noqa: PLC0415
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "curve.csv"
+        truth = rc.make_curve(job["case"], job["slip"], job["noise"], job["variant"], np.random.default_rng(ss),
+                              path, rows=job["rows"])
+        rec["rows_written"], rec["pull_off_in_data"] = truth["rows"], truth["pull_off_in_data"]
+        try:
+            slip = fit(str(path), rc.CASES[job["case"]].scene, slip="auto").as_dict()["slip"]
+        except Exception as err:  # noqa: BLE001 - the study counts every failure, whatever its kind
+            slip = {}
+            rec["error"] = f"{type(err).__name__}: {err}"[:300]
+    rec["wall_s"] = time.perf_counter() - t0
+    for k in ("favoured", "evidence", "delta_bic", "selected"):
+        rec[k] = slip.get(k)
+    return rec
+
+
+def _indexed(k: int, job: dict) -> tuple[int, dict]:
+    return k, run_one(job)
+
+
+def _key(rec: dict) -> tuple:
+    return tuple(rec[k] for k in KEY) + (rec["seed"], rec["rows"])
+
+
+def read_records(path: Path) -> list[dict]:
+    """The records of a ``.partial.jsonl`` (a torn last line, from a killed run, is skipped)."""
+    out = []
+    for line in path.read_text(encoding="utf-8").splitlines() if path.exists() else []:
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError:
+            continue
+    return out
+
+
+def execute(args) -> tuple[list[dict], float]:
+    """Run the plan's missing fits in ``--workers`` processes, appending each record to OUT.partial.jsonl."""
+    from adhfit.fitting import runners  # noqa: PLC0415
+    jobs = plan(args)
+    partial = Path(args.out).with_suffix(".partial.jsonl")
+    partial.parent.mkdir(parents=True, exist_ok=True)
+    old = {_key(r): r for r in read_records(partial)} if args.resume else {}
+    if not args.resume:
+        partial.write_text("", encoding="utf-8")
+    done = {k: old[_key(j)] for k, j in enumerate(jobs) if _key(j) in old}
+    calls = [(k, j) for k, j in enumerate(jobs) if k not in done]
+    t0 = time.perf_counter()
+
+    def report(item: tuple[int, dict]) -> None:
+        k, rec = item
+        done[k] = rec
+        with partial.open("a", encoding="utf-8") as fh:
+            fh.write(json.dumps(rec, default=str) + "\n")
+        print(f"[{len(done)}/{len(jobs)} {time.perf_counter() - t0:.0f} s] {rec['case']} {rec['slip']} "
+              f"{rec['variant']} {100 * rec['noise']:g} % #{rec['rep']}: {rec['favoured']} {rec['evidence']} "
+              f"{rec['error'] or ''}", file=sys.stderr, flush=True)
+
+    def crashed(k: int, message: str) -> tuple[int, dict]:
+        return k, dict(jobs[k], error=message[:300], favoured=None, evidence=None, delta_bic=None, selected=None,
+                       wall_s=None, spawn_key=None)
+
+    if args.workers > 1:
+        runners.run_local(_indexed, calls, args.workers, report, crashed)
+    else:
+        for call in calls:
+            report(_indexed(*call))
+    return [done[k] for k in range(len(jobs))], time.perf_counter() - t0
+
+
+def provenance(argv: list[str], wall: float | None, workers: int, load_start: str) -> dict:
+    """Command, engine commit (``+dirty`` with uncommitted changes under adhfit/), machine facts."""
+    import adhfit  # noqa: PLC0415
+    dirty = bool(recovery._git("status", "--porcelain", "--", "adhfit"))
+    return {"command": "python benchmarks/verdict_calibration.py " + " ".join(argv),
+            "commit": (recovery._git("rev-parse", "--short", "HEAD") or "?") + ("+dirty" if dirty else ""),
+            "adhfit_last_changed": recovery._git("log", "-1", "--format=%h", "--", "adhfit"),
+            "adhfit": adhfit.__version__, "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+            "wall_s": None if wall is None else round(wall, 1), "workers": workers,
+            "nproc": os.cpu_count(), "load_start": load_start, "load_end": _load(),
+            "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "partial": None}
+
+
+def _load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def run(args, argv: list[str]) -> dict:
+    """Run (or read) the fits, summarise them, write OUT.json and OUT.md."""
+    load_start = _load()
+    if args.from_records:
+        records, wall = read_records(Path(args.from_records)), None
+    else:
+        records, wall = execute(args)
+    prov = provenance(argv, wall, args.workers, load_start)
+    if args.from_records:
+        prov["partial"] = (f"report from the {len(records)} records of {args.from_records} (of the "
+                           f"{len(plan(args))} planned; every cell advances in proportion to its replicate count)")
+    out = {"provenance": prov,
+           "settings": {k: v for k, v in vars(args).items() if k not in ("out", "from_records", "resume")}
+           | {"truth": rc.TRUTH, "drift_fraction": rc.DRIFT, "promise": vs.PROMISE, "level": vs.LEVEL},
+           "summary": vs.summarize(records), "records": records}
+    out_path = Path(args.out)
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    out_path.with_suffix(".json").write_text(json.dumps(out, indent=1, default=str) + "\n", encoding="utf-8")
+    vs.write_markdown(out, out_path.with_suffix(".md"))
+    return out
+
+
+def parse(argv: list[str]) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--replicates", type=int, default=10, help="fits per clean cell (case x slip x noise)")
+    ap.add_argument("--replicates-variants", type=int, default=2, help="fits per cell of the other variants")
+    ap.add_argument("--noise", type=float, nargs="+", default=list(NOISES),
+                    help="force noise σ as a fraction of the peak force")
+    ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(rc.VARIANTS))
+    ap.add_argument("--cases", nargs="+", default=list(rc.CASES), choices=list(rc.CASES))
+    ap.add_argument("--slips", nargs="+", default=list(rc.SLIPS), choices=list(rc.SLIPS))
+    ap.add_argument("--rows", type=int, default=rc.ROWS, help="rows of a whole test (sets the row spacing)")
+    ap.add_argument("--seed", type=int, default=SEED, help="root seed of every fit's SeedSequence")
+    ap.add_argument("--workers", type=int, default=1, help="local processes (as adhfit fit --workers)")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "verdict_calibration"),
+                    help="output path without suffix")
+    group = ap.add_mutually_exclusive_group()
+    group.add_argument("--resume", action="store_true", help="run only the fits missing from OUT.partial.jsonl")
+    group.add_argument("--from-records", help="make the report from a .partial.jsonl, fitting nothing")
+    args = ap.parse_args(argv)
+    if args.workers < 1 or args.replicates < 0 or args.replicates_variants < 0 or args.rows < 20:
+        ap.error("--workers must be >= 1, replicate counts >= 0 and --rows >= 20")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    args = parse(argv)
+    out = run(args, argv)
+    print(f"{out['summary']['fits']} fits in {out['provenance']['wall_s']} s -> {args.out}.md")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
