@@ -3,8 +3,8 @@
 The noise-free curve comes from the forward model alone (:func:`adhfit.simulate`, the dimensionless
 engine, with the scene's scales); everything a real test adds is added here, not by the fitting
 package: Gaussian force noise, an un-tared load cell, a load-cell zero that drifts during the test, a
-test stopped early, an export that wrote every row twice.  The curve is written to a CSV file (docs/contracts.md A4 columns) so that the fit reads it as a
-user's file would be read.
+test stopped early, an export that wrote every row twice.  The curve is written to a CSV file
+(docs/contracts.md A4 columns) so that the fit reads it as a user's file would be read.
 
 A test follows a real one: the control variable rises at a constant step from before contact to its
 largest value, then falls at the same step.  On the way out the force follows the stable branch
