@@ -92,7 +92,7 @@ def summarize(recs: list[dict]) -> dict:
     return {"fits": len(recs), "errors": len(recs) - len(ok),
             "selected": len(selected), "selected_wrong": sum(r["selected"] != r["slip"] for r in selected),
             "words": word_table(ok),
-            "by_noise": grouped(recs, "noise_pct"), "by_variant": grouped(recs, "variant"),
+            "by_noise": grouped(sorted(recs, key=lambda r: r["noise"]), "noise_pct"), "by_variant": grouped(recs, "variant"),
             "by_case_slip": grouped(recs, "case_slip"),
             "wrong_strong": [{k: r[k] for k in ("case", "slip", "variant", "noise", "rep", "favoured", "evidence",
                                                 "delta_bic", "spawn_key")} for r in strong]}
