@@ -174,9 +174,11 @@ def make_curve(case: str, slip: str, noise: float, variant: str, rng: np.random.
         x_meas, force, time_s = (np.repeat(a, 2) for a in (x_meas, force, time_s))
     _write_csv(path, c.scene.control, time_s, x_meas, force)
     reached = x_true[n - 1] < d.xr[-1]
+    detached = np.flatnonzero(x_true[n_up:n] < d.xr[-1])  # rows past the turning point: force zero
     return {**TRUTH, "slip": slip, "sigma": sigma, "force_offset": offset, "x_offset": c.x_offset,
             "force_drift": DRIFT * f_peak if variant == "drift" else 0.0,
             "peak_force": f_peak, "rows": int(x_meas.size), "pull_off_in_data": bool(reached),
+            "first_detached_row": int(n_up + detached[0]) if detached.size else None,
             "G_max_reached": min(g_max, TRUTH["work_of_adhesion"])}
 
 

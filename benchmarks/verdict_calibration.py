@@ -79,16 +79,24 @@ def run_one(job: dict) -> dict:
         path = Path(tmp) / "curve.csv"
         truth = rc.make_curve(job["case"], job["slip"], job["noise"], job["variant"], np.random.default_rng(ss),
                               path, rows=job["rows"])
-        rec["rows_written"], rec["pull_off_in_data"] = truth["rows"], truth["pull_off_in_data"]
+        rec["truth"] = {k: truth[k] for k in ("rows", "sigma", "pull_off_in_data", "first_detached_row")}
         try:
-            slip = fit(str(path), rc.CASES[job["case"]].scene, slip="auto").as_dict()["slip"]
+            rep = fit(str(path), rc.CASES[job["case"]].scene, slip="auto").as_dict()
         except Exception as err:  # noqa: BLE001 - the study counts every failure, whatever its kind
-            slip = {}
+            rep = {}
             rec["error"] = f"{type(err).__name__}: {err}"[:300]
     rec["wall_s"] = time.perf_counter() - t0
     for k in ("favoured", "evidence", "delta_bic", "selected"):
-        rec[k] = slip.get(k)
+        rec[k] = rep.get("slip", {}).get(k)
+    rec["fits"] = {s: _fit_facts(f) for s, f in rep.get("fits", {}).items()}
     return rec
+
+
+def _fit_facts(f: dict) -> dict:
+    """What tells a stuck optimum from noise, per slip: χ², σ, lag-1 residual autocorrelation, the row
+    the model detaches at (compare ``truth.first_detached_row``)."""
+    return {k: f.get(k) for k in ("chisqr", "ndata", "sigma", "residual_autocorrelation", "first_detached_row",
+                                  "success")}
 
 
 def _indexed(k: int, job: dict) -> tuple[int, dict]:
@@ -144,16 +152,36 @@ def execute(args) -> tuple[list[dict], float]:
     return [done[k] for k in range(len(jobs))], time.perf_counter() - t0
 
 
-def provenance(argv: list[str], wall: float | None, workers: int, load_start: str) -> dict:
-    """Command, engine commit (``+dirty`` with uncommitted changes under adhfit/), machine facts."""
-    import adhfit  # noqa: PLC0415
+def refit_wrong(records: list[dict]) -> list[dict]:
+    """Records of wrong strong / very strong verdicts that lack the per-slip facts (``fits``: made by an
+    older ``run_one``) fitted again from their seeds; the verdict must come out the same."""
+    out = []
+    for r in records:
+        if r.get("fits") is None and r.get("evidence") in vs.PROMISE and vs.is_wrong(r):
+            new = run_one({k: r[k] for k in (*KEY, "seed", "rows")})
+            if (new["favoured"], new["evidence"]) != (r["favoured"], r["evidence"]):
+                raise RuntimeError(f"refit of {r['spawn_key']} gave {new['favoured']} {new['evidence']}, "
+                                   f"the run {r['favoured']} {r['evidence']}")
+            r = dict(r, truth=new["truth"], fits=new["fits"], refit=True)
+        out.append(r)
+    return out
+
+
+def revision() -> dict:
+    """The checkout's commit (``+dirty`` with uncommitted changes under adhfit/) and adhfit/'s last commit,
+    taken when the run starts; the load average then."""
     dirty = bool(recovery._git("status", "--porcelain", "--", "adhfit"))
-    return {"command": "python benchmarks/verdict_calibration.py " + " ".join(argv),
-            "commit": (recovery._git("rev-parse", "--short", "HEAD") or "?") + ("+dirty" if dirty else ""),
+    return {"commit": (recovery._git("rev-parse", "--short", "HEAD") or "?") + ("+dirty" if dirty else ""),
             "adhfit_last_changed": recovery._git("log", "-1", "--format=%h", "--", "adhfit"),
-            "adhfit": adhfit.__version__, "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
-            "wall_s": None if wall is None else round(wall, 1), "workers": workers,
-            "nproc": os.cpu_count(), "load_start": load_start, "load_end": _load(),
+            "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "load_start": _load()}
+
+
+def provenance(argv: list[str], wall: float | None, workers: int, start: dict) -> dict:
+    """Command, engine revision at the start, machine facts."""
+    import adhfit  # noqa: PLC0415
+    return {"command": "python benchmarks/verdict_calibration.py " + " ".join(argv), **start,
+            "adhfit": adhfit.__version__, "wall_s": None if wall is None else round(wall, 1), "workers": workers,
+            "nproc": os.cpu_count(), "load_end": _load(),
             "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
             "partial": None}
 
@@ -164,17 +192,22 @@ def _load() -> str:
 
 def run(args, argv: list[str]) -> dict:
     """Run (or read) the fits, summarise them, write OUT.json and OUT.md."""
-    load_start = _load()
+    start = revision()
     if args.from_records:
         records, wall = read_records(Path(args.from_records)), None
+        if args.refit_wrong:
+            records = refit_wrong(records)
     else:
         records, wall = execute(args)
-    prov = provenance(argv, wall, args.workers, load_start)
+    prov = provenance(argv, wall, args.workers, start)
     if args.from_records:
+        prov["remade_from"] = f"{args.from_records}" + (" (wrong strong verdicts refitted)" if args.refit_wrong else "")
+    if args.from_records and len(records) < len(plan(args)):
         prov["partial"] = (f"report from the {len(records)} records of {args.from_records} (of the "
                            f"{len(plan(args))} planned; every cell advances in proportion to its replicate count)")
     out = {"provenance": prov,
-           "settings": {k: v for k, v in vars(args).items() if k not in ("out", "from_records", "resume")}
+           "settings": {k: v for k, v in vars(args).items()
+                        if k not in ("out", "from_records", "resume", "refit_wrong")}
            | {"truth": rc.TRUTH, "drift_fraction": rc.DRIFT, "promise": vs.PROMISE, "level": vs.LEVEL},
            "summary": vs.summarize(records), "records": records}
     out_path = Path(args.out)
@@ -201,6 +234,8 @@ def parse(argv: list[str]) -> argparse.Namespace:
     group = ap.add_mutually_exclusive_group()
     group.add_argument("--resume", action="store_true", help="run only the fits missing from OUT.partial.jsonl")
     group.add_argument("--from-records", help="make the report from a .partial.jsonl, fitting nothing")
+    ap.add_argument("--refit-wrong", action="store_true",
+                    help="with --from-records: fit the wrong strong verdicts again to add the per-slip facts")
     args = ap.parse_args(argv)
     if args.workers < 1 or args.replicates < 0 or args.replicates_variants < 0 or args.rows < 20:
         ap.error("--workers must be >= 1, replicate counts >= 0 and --rows >= 20")

@@ -23,6 +23,8 @@ WORDS = tuple(word for _, word in SCALE)
 #: the promise of issue 20: largest acceptable wrong-rate per word
 PROMISE = {"very strong": 0.01, "strong": 0.05}
 LEVEL = 0.95
+WRONG_FIELDS = ("case", "slip", "variant", "noise", "rep", "favoured", "evidence", "delta_bic", "spawn_key",
+                "truth", "fits")
 
 
 def clopper_pearson(k: int, n: int, level: float = LEVEL) -> tuple[float, float] | tuple[None, None]:
@@ -94,8 +96,7 @@ def summarize(recs: list[dict]) -> dict:
             "words": word_table(ok),
             "by_noise": grouped(sorted(recs, key=lambda r: r["noise"]), "noise_pct"), "by_variant": grouped(recs, "variant"),
             "by_case_slip": grouped(recs, "case_slip"),
-            "wrong_strong": [{k: r[k] for k in ("case", "slip", "variant", "noise", "rep", "favoured", "evidence",
-                                                "delta_bic", "spawn_key")} for r in strong]}
+            "wrong_strong": [{k: r.get(k) for k in WRONG_FIELDS} for r in strong]}
 
 
 def _pct(x) -> str:
@@ -133,7 +134,21 @@ def _wrong_list(rows: list[dict]) -> str:
         return "None.\n"
     return "\n".join(f"- {r['case']}, true {r['slip']}, {r['variant']}, {100 * r['noise']:g} % noise, rep "
                      f"{r['rep']}: {r['favoured']} {r['evidence']} (ΔBIC = {r['delta_bic']:.1f}; spawn key "
-                     f"{r['spawn_key']})" for r in rows) + "\n"
+                     f"{r['spawn_key']}){_facts(r)}" for r in rows) + "\n"
+
+
+def _facts(r: dict) -> str:
+    """Per slip: fitted σ / true σ, lag-1 residual autocorrelation, model's first detached row vs the truth's."""
+    truth, fits = r.get("truth") or {}, r.get("fits") or {}
+    if not fits or not truth.get("sigma"):
+        return ""
+    parts = []
+    for slip, f in fits.items():
+        sig = "–" if f.get("sigma") is None else f"{f['sigma'] / truth['sigma']:.2f}"
+        ac = "–" if f.get("residual_autocorrelation") is None else f"{f['residual_autocorrelation']:.2f}"
+        parts.append(f"{slip}: σ/σ_true {sig}, lag-1 autocorrelation {ac}, detaches at row "
+                     f"{f.get('first_detached_row')}")
+    return f"; true first detached row {truth.get('first_detached_row')}; " + "; ".join(parts)
 
 
 def write_markdown(out: dict, path: Path) -> None:
@@ -146,7 +161,8 @@ def write_markdown(out: dict, path: Path) -> None:
         f"({t['errors']} raised) in {p['wall_s'] if p['wall_s'] is not None else '?'} s on {p['workers']} "
         f"worker(s); machine: nproc {p['nproc']}, load average {p['load_start']} at start, {p['load_end']} at end; "
         f"Python {p['python']}, numpy {p['numpy']}, scipy {p['scipy']}.\n"
-        + (f"\n**Partial: {p['partial']}**\n" if p.get("partial") else ""),
+        + (f"\n**Partial: {p['partial']}**\n" if p.get("partial") else "")
+        + (f"\nReport remade from the records of {p['remade_from']}.\n" if p.get("remade_from") else ""),
         f"Curves: `benchmarks/recovery_cases.py` (W_ad = {s['truth']['work_of_adhesion']} J/m², μh = "
         f"{s['truth']['mu_h']} N/m, large-stretch membrane, about {s['rows']} rows a test), written to CSV and "
         "fitted by `adhfit.fit(path, scene, slip='auto')` with default options. Variants: clean; drift (load-cell "
