@@ -11,14 +11,15 @@ Clopper-Pearson bound, overall, per noise level, per variant and per case.  The 
 Every fit has its own seed, ``SeedSequence(--seed, spawn_key=(case, slip, variant, noise in 1e-4,
 replicate))`` (``recovery.seed_sequence``), so a fit's curve does not depend on the selection, the order
 or the worker count.  Records are appended to ``OUT.partial.jsonl`` as they complete; ``--resume`` runs
-only the fits missing there, ``--from-records`` only makes the report.
+only the fits missing there, ``--from-records`` only makes the report (``--refit-wrong``: the wrong
+strong verdicts of records without per-slip facts are fitted again from their seeds to add them).
 
 Usage (from the repository root)::
 
     python benchmarks/verdict_calibration.py [--replicates 10] [--replicates-variants 2]
         [--noise 0.005 0.01 0.02 0.03 0.05] [--variants clean drift trunc-turn ...] [--cases ...]
-        [--slips ...] [--rows 200] [--seed 20261204] [--workers 2] [--resume | --from-records FILE]
-        [--out benchmarks/results/verdict_calibration]
+        [--slips ...] [--rows 200] [--seed 20261204] [--workers 2]
+        [--resume | --from-records FILE [--refit-wrong]] [--out benchmarks/results/verdict_calibration]
 
 Writes ``OUT.json`` (every fit and every table) and ``OUT.md``.
 """
