@@ -194,6 +194,7 @@ def _load() -> str:
 def run(args, argv: list[str]) -> dict:
     """Run (or read) the fits, summarise them, write OUT.json and OUT.md."""
     start = revision()
+    out_json = Path(args.out).with_suffix(".json")
     if args.from_records:
         records, wall = read_records(Path(args.from_records)), None
         if args.refit_wrong:
@@ -202,10 +203,7 @@ def run(args, argv: list[str]) -> dict:
         records, wall = execute(args)
     prov = provenance(argv, wall, args.workers, start)
     if args.from_records:
-        prov["remade_from"] = f"{args.from_records}" + (" (wrong strong verdicts refitted)" if args.refit_wrong else "")
-    if args.from_records and len(records) < len(plan(args)):
-        prov["partial"] = (f"report from the {len(records)} records of {args.from_records} (of the "
-                           f"{len(plan(args))} planned; every cell advances in proportion to its replicate count)")
+        prov |= _remade(args, len(records), out_json)
     out = {"provenance": prov,
            "settings": {k: v for k, v in vars(args).items()
                         if k not in ("out", "from_records", "resume", "refit_wrong")}
@@ -213,8 +211,21 @@ def run(args, argv: list[str]) -> dict:
            "summary": vs.summarize(records), "records": records}
     out_path = Path(args.out)
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.with_suffix(".json").write_text(json.dumps(out, indent=1, default=str) + "\n", encoding="utf-8")
+    out_json.write_text(json.dumps(out, indent=1, default=str) + "\n", encoding="utf-8")
     vs.write_markdown(out, out_path.with_suffix(".md"))
+    return out
+
+
+def _remade(args, n: int, out_json: Path) -> dict:
+    """Provenance of a report remade from records: the file, the previous run's facts (from OUT.json when
+    it is there), and whether records are missing from the plan."""
+    prev = json.loads(out_json.read_text(encoding="utf-8")).get("provenance", {}) if out_json.exists() else {}
+    out = {"remade_from": args.from_records + (" (wrong strong verdicts refitted)" if args.refit_wrong else ""),
+           "run": prev.get("run") or prev or None}
+    planned = len(plan(args))
+    if n < planned:
+        out["partial"] = (f"report from the {n} records of {args.from_records} (of the {planned} planned; "
+                          "every cell advances in proportion to its replicate count)")
     return out
 
 

@@ -94,9 +94,19 @@ def summarize(recs: list[dict]) -> dict:
     return {"fits": len(recs), "errors": len(recs) - len(ok),
             "selected": len(selected), "selected_wrong": sum(r["selected"] != r["slip"] for r in selected),
             "words": word_table(ok),
-            "by_noise": grouped(sorted(recs, key=lambda r: r["noise"]), "noise_pct"), "by_variant": grouped(recs, "variant"),
+            "by_noise": grouped(sorted(recs, key=lambda r: r["noise"]), "noise_pct"),
+            "by_variant": grouped(recs, "variant"),
             "by_case_slip": grouped(recs, "case_slip"),
             "wrong_strong": [{k: r.get(k) for k in WRONG_FIELDS} for r in strong]}
+
+
+def _run(run: dict | None) -> str:
+    """The facts of the run that made the records, when the report was remade from them."""
+    if not run:
+        return ""
+    return (f"\nThe fits: `{run['command']}`, {run['date_utc']} UTC (ended), {run['wall_s']} s on {run['workers']} "
+            f"worker(s), load average {run['load_start']} at start, {run['load_end']} at end; commit {run['commit']} "
+            f"at the end of the run, adhfit/ last changed in {run.get('adhfit_last_changed')}.\n")
 
 
 def _pct(x) -> str:
@@ -158,11 +168,13 @@ def write_markdown(out: dict, path: Path) -> None:
         "# Slip-verdict calibration\n",
         f"Command: `{p['command']}`  \nadhfit commit {p['commit']} (adhfit/ last changed in "
         f"{p.get('adhfit_last_changed')}), {p['date_utc']} UTC, {t['fits']} fits "
-        f"({t['errors']} raised) in {p['wall_s'] if p['wall_s'] is not None else '?'} s on {p['workers']} "
-        f"worker(s); machine: nproc {p['nproc']}, load average {p['load_start']} at start, {p['load_end']} at end; "
+        f"({t['errors']} raised)" + ("; " if p.get("run") else
+                                      f" in {p['wall_s']} s on {p['workers']} worker(s); ") + "machine:"
+        f" nproc {p['nproc']}, load average {p['load_start']} at start, {p['load_end']} at end; "
         f"Python {p['python']}, numpy {p['numpy']}, scipy {p['scipy']}.\n"
         + (f"\n**Partial: {p['partial']}**\n" if p.get("partial") else "")
-        + (f"\nReport remade from the records of {p['remade_from']}.\n" if p.get("remade_from") else ""),
+        + (f"\nReport remade from the records of {p['remade_from']}.\n" if p.get("remade_from") else "")
+        + _run(p.get("run")),
         f"Curves: `benchmarks/recovery_cases.py` (W_ad = {s['truth']['work_of_adhesion']} J/m², μh = "
         f"{s['truth']['mu_h']} N/m, large-stretch membrane, about {s['rows']} rows a test), written to CSV and "
         "fitted by `adhfit.fit(path, scene, slip='auto')` with default options. Variants: clean; drift (load-cell "
