@@ -134,3 +134,11 @@ def test_verdict_calibration_full(tmp_path):
     assert out["summary"]["fits"] >= 400
     for word, promise in vs.PROMISE.items():
         assert words[word]["rate"] is None or words[word]["rate"] <= promise, words[word]
+
+
+def test_partial_records_survive_a_torn_last_line(tmp_path):
+    """A run killed while writing leaves a torn last line: resuming reads the whole records and refits the rest."""
+    path = tmp_path / "vc.partial.jsonl"
+    path.write_text('{"case": "a", "rep": 0}\n{"case": "a", "rep": 1}\n{"case": "a", "re', encoding="utf-8")
+    assert vc.read_records(path) == [{"case": "a", "rep": 0}, {"case": "a", "rep": 1}]
+    assert vc.read_records(tmp_path / "missing.jsonl") == []
