@@ -192,7 +192,7 @@ def run(args, argv: list[str]) -> dict:
                "partial": f"report from the {len(records)} records of {args.from_records} (run stopped early; "
                           "every cell advances in proportion to its replicate count)" if args.from_records else None},
            "settings": {k: v for k, v in vars(args).items() if k != "out"} | {
-               "truth": rc.TRUTH, "baseline_fraction": rc.BASELINE,
+               "truth": rc.TRUTH, "baseline_fraction": rc.BASELINE, "drift_fraction": rc.DRIFT,
                "mcmc_settings": MCMC_SETTINGS if args.method == "mcmc" else None},
            "pooled": rs.cells(records, ("variant", "noise")),
            "cells": rs.cells(records, ("case", "slip", "variant", "noise")),

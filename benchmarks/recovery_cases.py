@@ -2,9 +2,9 @@
 
 The noise-free curve comes from the forward model alone (:func:`adhfit.simulate`, the dimensionless
 engine, with the scene's scales); everything a real test adds is added here, not by the fitting
-package: Gaussian force noise, an un-tared load cell, a test stopped early, an export that wrote every
-row twice.  The curve is written to a CSV file (docs/contracts.md A4 columns) so that the fit reads it as a
-user's file would be read.
+package: Gaussian force noise, an un-tared load cell, a load-cell zero that drifts during the test, a
+test stopped early, an export that wrote every row twice.  The curve is written to a CSV file
+(docs/contracts.md A4 columns) so that the fit reads it as a user's file would be read.
 
 A test follows a real one: the control variable rises at a constant step from before contact to its
 largest value, then falls at the same step.  On the way out the force follows the stable branch
@@ -27,6 +27,8 @@ TRUTH = {"work_of_adhesion": 0.4, "mu_h": 2.0}          # J/m^2, N/m (the paper'
 SLIPS = ("no-slip", "frictionless")
 NOISES = (0.002, 0.005, 0.01, 0.02, 0.04, 0.05)          # force noise σ / peak force
 BASELINE = 0.015                                         # un-tared load cell, fraction of the peak force
+DRIFT = 0.01                                             # zero drift at the end of the test, fraction of the peak force
+ROWS = 200                                               # rows of a whole test (loading and unloading)
 STEP_S = 0.5                                             # time between rows, s
 
 
@@ -54,7 +56,8 @@ def _cases() -> dict[str, Case]:
 
 
 CASES = _cases()
-VARIANTS = ("clean", "baseline", "trunc-turn", "trunc-pinning", "trunc-delamination", "duplicated")
+#: appended, never reordered: a replicate's seed uses the variant's index here (recovery.seed_sequence)
+VARIANTS = ("clean", "baseline", "trunc-turn", "trunc-pinning", "trunc-delamination", "duplicated", "drift")
 #: variants whose unloading never reaches delamination: W_ad is bounded from below only
 LOWER_BOUND_VARIANTS = ("trunc-turn", "trunc-pinning")
 
@@ -107,11 +110,12 @@ def applicable(case: str, slip: str, variant: str) -> bool:
     return variant != "trunc-delamination" or dense(case, slip).stable_delamination
 
 
-def _noise_free(d: Dense) -> tuple[np.ndarray, np.ndarray, int]:
-    """Rows (x, f) of the whole test at a constant step, and the index of the first unloading row."""
+def _noise_free(d: Dense, rows: int = ROWS) -> tuple[np.ndarray, np.ndarray, int]:
+    """Rows (x, f) of the whole test at a constant step (about ``rows`` of them), and the index of the
+    first unloading row."""
     x0, x1, x_tp = d.xl[0], d.xl[-1], d.xr[-1]
     start, stop = x0 - 0.08 * (x1 - x0), x_tp - 0.15 * (x1 - x_tp)
-    step = ((x1 - start) + (x1 - stop)) / 199
+    step = ((x1 - start) + (x1 - stop)) / (rows - 1)
     up = np.linspace(start, x1, int(round((x1 - start) / step)) + 1)
     down = np.linspace(x1, stop, int(round((x1 - stop) / step)) + 1)[1:]
     f_up = np.where(up <= x0, 0.0, np.interp(up, d.xl, d.fl))
@@ -136,21 +140,29 @@ def _keep(variant: str, x: np.ndarray, n_up: int, d: Dense, rng: np.random.Gener
     return n_up + max(int(np.count_nonzero(down >= stop)), 1)
 
 
+def drift(rows: int, f_peak: float) -> np.ndarray:
+    """A load-cell zero that drifts linearly in time from 0 to ``DRIFT * f_peak`` over the whole test (N)."""
+    return np.linspace(0.0, DRIFT * f_peak, rows)
+
+
 def make_curve(case: str, slip: str, noise: float, variant: str, rng: np.random.Generator,
-               path: Path) -> dict:
+               path: Path, rows: int = ROWS) -> dict:
     """Write one synthetic test to ``path`` (CSV) and return its truth.
 
     Noise is drawn for every row of the full test first, so a truncated test is a prefix of a full one.
+    ``rows`` sets the row spacing: the whole test has about that many rows (the default is the study's).
     """
     if variant not in VARIANTS:
         raise ValueError(f"variant {variant!r}: expected one of {VARIANTS}")
     c, d = CASES[case], dense(case, slip)
-    x_true, f_true, n_up = _noise_free(d)
+    x_true, f_true, n_up = _noise_free(d, rows)
     f_peak = float(np.max(d.fl))
     sigma = noise * f_peak
     force = f_true + rng.normal(0.0, sigma, f_true.size)
     offset = BASELINE * f_peak if variant == "baseline" else 0.0
     force = force + offset
+    if variant == "drift":
+        force = force + drift(force.size, f_peak)
     n = _keep(variant, x_true, n_up, d, rng)
     x_meas, force = x_true[:n] - c.x_offset, force[:n]
     u = np.sqrt(np.clip(d.xr - d.xr[-1], 0.0, None))
@@ -162,8 +174,11 @@ def make_curve(case: str, slip: str, noise: float, variant: str, rng: np.random.
         x_meas, force, time_s = (np.repeat(a, 2) for a in (x_meas, force, time_s))
     _write_csv(path, c.scene.control, time_s, x_meas, force)
     reached = x_true[n - 1] < d.xr[-1]
+    detached = np.flatnonzero(x_true[n_up:n] < d.xr[-1])  # rows past the turning point: force zero
     return {**TRUTH, "slip": slip, "sigma": sigma, "force_offset": offset, "x_offset": c.x_offset,
+            "force_drift": DRIFT * f_peak if variant == "drift" else 0.0,
             "peak_force": f_peak, "rows": int(x_meas.size), "pull_off_in_data": bool(reached),
+            "first_detached_row": int(n_up + detached[0]) if detached.size else None,
             "G_max_reached": min(g_max, TRUTH["work_of_adhesion"])}
 
 

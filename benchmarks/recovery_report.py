@@ -110,7 +110,9 @@ def write_markdown(out: dict, path: Path) -> None:
             f"{100 * st['baseline_fraction']:g} % of the peak force on every row); trunc-turn (stopped 5–15 "
             "rows after the end of loading); trunc-pinning (stopped inside pinning); trunc-delamination "
             "(stopped inside delamination before pull-off; not for pressure control on a flat substrate, "
-            "where pull-off ends pinning); duplicated (every row twice).\n", LEGEND,
+            "where pull-off ends pinning); duplicated (every row twice); drift (a load-cell zero drifting "
+            f"linearly from 0 to {100 * st.get('drift_fraction', 0.01):g} % of the peak force over the "
+            "test).\n", LEGEND,
             "## Pooled over cases and slip conditions\n", table(out["pooled"], ("variant", "noise")), "",
             "## Per case\n", table(out["cells"], ("case", "slip", "variant", "noise")), "",
             "## Failures\n", _errors(out), "## Duplicated rows\n", _duplicates(out),
