@@ -121,7 +121,7 @@ def read_records(path: Path) -> list[dict]:
 
 def execute(args) -> tuple[list[dict], float]:
     """Run the plan's missing fits in ``--workers`` processes, appending each record to OUT.partial.jsonl."""
-    from adhfit.fitting import runners  # noqa: PLC0415
+    from adhfit.cli import runners  # noqa: PLC0415
     jobs = plan(args)
     partial = Path(args.out).with_suffix(".partial.jsonl")
     partial.parent.mkdir(parents=True, exist_ok=True)
