@@ -142,7 +142,7 @@ def _split(points):
 
 def history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
             rs: float, a_max: float | None = None, delta_max: float | None = None,
-            p_max: float | None = None, lambda0: float = 2.0, points: int = 200) -> History:
+            p_max: float | None = None, lambda0: float = 2.0, points: int = 200, retry: bool = True) -> History:
     """Compute a full dimensionless history (docs/contracts.md A2).
 
     Parameters
@@ -165,6 +165,10 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         only validated here.
     points : int
         Approximate number of rows.
+    retry : bool
+        Retry a failed history on other row grids (:func:`retry_points`) before reporting it.  A fit
+        passes False: it has its own, cheaper retries, and a failed evaluation must cost one history
+        (with the engine's retries a truncated pressure-control test took minutes instead of seconds).
 
     Returns
     -------
@@ -185,7 +189,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     if not math.isfinite(end[0]):
         end = (_resolve_end(v, c, pc, kappa_dc, d_fix, p_cr),) + end[1:]
     failures = []
-    for pts in retry_points(v["points"]):
+    for pts in retry_points(v["points"]) if retry else (v["points"],):
         (status, err, a_m, out, counts, tp_pos, summ, f_max, branch_end) = K.run(
             pc, slip == "no-slip", kappa_dc, d_fix, p_cr, c, float(v["w"]), *end, *_grids(pts), A_END)
         if status == K.H_OK:

@@ -30,8 +30,9 @@ class Membrane:
     description : str
         One line for help texts and reports.
     history : callable
-        ``(control, slip, *, p, d, w, rs, a_max, delta_max, p_max, lambda0, points) -> History``, the
-        dimensionless history (docs/contracts.md A1, A2).
+        ``(control, slip, *, p, d, w, rs, a_max, delta_max, p_max, lambda0, points, retry=True) -> History``,
+        the dimensionless history (docs/contracts.md A1, A2); ``retry=False`` (a fit's evaluations) asks for
+        one attempt, where the engine would retry on other row grids.
     uses_prestretch : bool
         Whether λ0 changes the observables (under the large-stretch approximation it cancels).
     """
@@ -51,9 +52,9 @@ def _large_stretch(control: str, slip: str, **kw) -> History:
     return history(control, slip, **kw)
 
 
-def _exact(control: str, slip: str, **kw) -> History:
+def _exact(control: str, slip: str, retry: bool = True, **kw) -> History:
     from .exact.history import exact_history  # noqa: PLC0415 - the exact model loads on demand
-    return exact_history(control, slip, **kw)
+    return exact_history(control, slip, **kw)  # its one retry (a 4x finer delamination march) always runs
 
 
 #: every membrane model, by name

@@ -294,8 +294,9 @@ class CurveModel:
         return pcs
 
     def _history(self, kw: dict, points: int):
-        """One history as arrays (no table), from the membrane model's registry entry."""
-        return self._engine.history(**kw, points=points)
+        """One history as arrays (no table), from the membrane model's registry entry (one attempt: the
+        fit retries on its own grids, :data:`RETRY_POINTS`)."""
+        return self._engine.history(**kw, points=points, retry=False)
 
     def dimensionless_x(self, mu_h: float, x_offset: float, x: np.ndarray | None = None) -> np.ndarray:
         """The measured control values (or ``x``) as δ/b or p (with the offset)."""
