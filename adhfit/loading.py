@@ -186,12 +186,16 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     d_fix = float(v["d"]) if pc else 0.0
     kappa_dc = 0.0 if pc else float(v["p"])
     p_cr = float(critical_pressure(d_fix)) if pc else 0.0
-    if not math.isfinite(end[0]):
-        end = (_resolve_end(v, c, pc, kappa_dc, d_fix, p_cr),) + end[1:]
     failures = []
     for pts in retry_points(v["points"]) if retry else (v["points"],):
         (status, err, a_m, out, counts, tp_pos, summ, f_max, branch_end) = K.run(
             pc, slip == "no-slip", kappa_dc, d_fix, p_cr, c, float(v["w"]), *end, *_grids(pts), A_END)
+        if status in (K.H_END_UNREACHABLE, K.H_END_SOLVE) and not math.isfinite(end[0]):
+            # the compiled solve of the loading end (one call, ~0.2 ms) failed: the end along the
+            # making-contact states (core/ends.py, ~1 ms) finds it or says where the branch stops
+            end = (_resolve_end(v, c, pc, kappa_dc, d_fix, p_cr),) + end[1:]
+            (status, err, a_m, out, counts, tp_pos, summ, f_max, branch_end) = K.run(
+                pc, slip == "no-slip", kappa_dc, d_fix, p_cr, c, float(v["w"]), *end, *_grids(pts), A_END)
         if status == K.H_OK:
             break
         failures.append((pts, int(status), err.copy()))
