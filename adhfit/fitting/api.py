@@ -134,7 +134,7 @@ def fit(data: Any, scene: Any, *, method: str = "lsq", **options: Any) -> FitRes
     from .stage import least_squares  # noqa: PLC0415
     stage = least_squares(problem, opts, profile=opts.profile and opts.method == "lsq")
     if opts.method == "mcmc":
-        from .sampling import sample  # noqa: PLC0415 - emcee loads only for MCMC
+        from .bayes.sampling import sample  # noqa: PLC0415 - emcee loads only for MCMC
         return sample(problem, stage, opts, t0)
-    from .assemble import assemble  # noqa: PLC0415
+    from .stage import assemble  # noqa: PLC0415
     return assemble(problem, stage, opts, t0)

@@ -24,14 +24,14 @@ from typing import Mapping
 
 import numpy as np
 
-from .assemble import assemble
+from ..stage import assemble
 from .chains import diagnose
-from .selection import StudentT, importance_evidence, model_probabilities
+from ..selection import StudentT, importance_evidence, model_probabilities
 from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
-from .model import OFFSET_NAME, ModelDomainError
+from ..model import OFFSET_NAME, ModelDomainError
 from .posterior import SHARED, Target, checked_covariance, objective_priors
-from .result import Estimate, FitResult
-from .selection import SCALE, evidence_word
+from ..result import Estimate, FitResult
+from ..selection import SCALE, evidence_word
 
 __all__ = ["sample", "DEFAULTS", "SERIES_DEFAULTS", "CI_METHOD", "REJECT_DBIC", "SHORT_RUN"]
 
@@ -250,7 +250,7 @@ _LSQ_ONLY = ("The series cannot decide", "The slip condition is undecided", "The
 
 
 def _warnings(lsq_result, reported, verdict, diags, probs, rep_fit, converged, chains_saved: bool) -> list[str]:
-    from .summary import status_warnings  # noqa: PLC0415
+    from ..summary import status_warnings  # noqa: PLC0415
     out = [w for w in lsq_result.warnings if not w.startswith(_LSQ_ONLY)]
     bad = [s for s, d in diags.items() if not d["converged"]]
     if bad and not converged:
@@ -370,7 +370,7 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, stage, path, t_lsq,
         "settings": cfg,
         "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a Student-t refitted "
                    f"after each of up to {cfg['tune_rounds']} tuning rounds (90 %) + differential evolution (10 %); "
-                   "see adhfit.fitting.mcmc",
+                   "see adhfit.fitting.bayes.mcmc",
         "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap "
                          f"({SHORT_RUN} steps for a condition the least-squares fit rejects by ΔBIC > {REJECT_DBIC:g})",
         "short_runs": sorted(rejected),
