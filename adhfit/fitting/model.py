@@ -44,15 +44,14 @@ import numpy as np
 
 from .. import membranes
 from ..errors import AdhfitError, InputError
-from ..params import SLIP_CONDITIONS
+from ..params import CONTROL_KEY, SLIP_CONDITIONS
 from .options import DEFAULT_POINTS
 from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
-           "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS", "pieces_from_columns"]
+           "OFFSET_NAME", "DEFAULT_POINTS", "pieces_from_columns"]
 
 #: dimensionless control variable of each control mode (docs/contracts.md A1)
-CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
 #: name of the control-variable offset (a row of adhfit.params.FITTED) per control mode
 OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offset"}
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
@@ -217,7 +216,10 @@ class CurveModel:
         self.segments = segments if segments is not None else segment(curve)
         self.x = np.asarray(curve.x, float)
         self.force = np.asarray(curve.force, float)
-        self.x_max = float(self.x[self.segments.i_turn])
+        binning = getattr(curve, "binning", None)
+        self._binning = binning
+        # the loading end: the largest control value as measured (a thinned curve's bins average it away)
+        self.x_max = float(self.x[self.segments.i_turn]) if binning is None else binning.x_max
         self._loading = self.segments.loading
         self.fixed_split = bool(fixed_split)
         # free split: every unloading row is attached or detached as the parameters say (see predict);
@@ -235,7 +237,8 @@ class CurveModel:
         if self.control == "pressure":
             self._fixed["d"] = float(unit.to_d(scene.gap))
         #: row order as a fraction of the test, 0 at the first row and 1 at the last (the drift's basis)
-        self.row_fraction = np.arange(self.x.size) / max(self.x.size - 1, 1)
+        rows = np.arange(self.x.size) if binning is None else binning.row
+        self.row_fraction = rows / max((self.x.size if binning is None else binning.rows) - 1, 1)
         self.n_histories = 0
         self.n_evaluations = 0
 
@@ -381,6 +384,9 @@ class CurveModel:
         if j is None or not self.fixed_split:
             return None
         x_a, x_d = float(self.x[j - 1]), float(self.x[j])
+        b = self._binning
+        if b is not None and b.gap is not None and j == b.i_jump:  # the gap between two rows as read
+            x_a, x_d = b.gap
         return x_a, x_d, max(abs(x_a - x_d), 1e-12 * abs(self.x_max)) / JUMP_SOFT
 
     def turning_point(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> tuple[float, float]:
