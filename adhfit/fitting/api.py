@@ -114,7 +114,8 @@ def fit(data: Any, scene: Any, *, method: str = "lsq", **options: Any) -> FitRes
     **options
         The fields of :class:`~.options.FitOptions` (``slip``, ``membrane``, ``sigma``,
         ``sigma_contact_radius``, ``contact_radius``, ``fit_x_offset``, ``fit_force_offset``, ``seed``,
-        ``points``, ``profile``, ``thin``, ``read_options``; MCMC: ``outdir``, ``workers``, ``progress``), and the
+        ``points``, ``profile``, ``thin``, ``read_options``; MCMC: ``outdir``, ``workers``, ``progress``,
+        ``stand_in``), and the
         MCMC settings (``n_walkers``, ``max_steps``, ...: flat, or as ``mcmc={...}``).  The same for one
         curve or many.
 

@@ -311,7 +311,7 @@ class CurveModel:
         return 1.0 / (sc.length if self.control == "displacement" else sc.pressure)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
-                force_offset: float = 0.0, force_drift: float = 0.0) -> np.ndarray:
+                force_offset: float = 0.0, force_drift: float = 0.0, unloading_shift: float = 0.0) -> np.ndarray:
         """Predicted force at every measured row, N (compressive positive).
 
         Parameters
@@ -326,6 +326,10 @@ class CurveModel:
             Added to the predicted force (load-cell zero at the first row), N.
         force_drift : float
             A linear drift of the zero from the first row to the last, N (added in row order).
+        unloading_shift : float
+            Moves the unloading branch (and its turning point) by this much in the control group (δ/b
+            or p): the exact membrane's stand-in aligns this model's fold with the exact one's
+            (:mod:`.bayes.surrogate`).
 
         Raises
         ------
@@ -337,7 +341,7 @@ class CurveModel:
         xd = self.dimensionless_x(mu_h, x_offset)
         f = np.zeros(xd.shape)
         f[self._loading] = pcs.f_loading(xd[self._loading])
-        f[self._attached] = pcs.f_unloading(xd[self._attached])
+        f[self._attached] = pcs.f_unloading(xd[self._attached] - unloading_shift)
         if not self.fixed_split:
             f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
         out = f * self._scales(float(mu_h)).force + force_offset
