@@ -1,4 +1,4 @@
-"""The exact membrane's stand-in for MCMC (issue 21; adhfit/fitting/bayes/surrogate.py).
+"""The exact membrane's stand-in for MCMC (issue 21; adhfit/fitting/bayes/stand_in.py).
 
 The stand-in (large-stretch model + the exact model's difference, linear about the optimum, with the
 unloading fold moved onto the exact one) is checked here against the exact model itself, evaluated
@@ -14,7 +14,7 @@ import pytest
 import adhfit
 from adhfit.fitting.api import read_problem
 from adhfit.fitting.bayes.posterior import Target, objective_priors
-from adhfit.fitting.bayes.surrogate import stand_in
+from adhfit.fitting.stand_in import stand_in
 from adhfit.fitting.options import FitOptions
 from adhfit.fitting.stage import least_squares
 
@@ -78,7 +78,7 @@ def test_mcmc_samples_through_the_checked_stand_in():
 
 
 def test_a_failed_check_samples_the_exact_posterior(monkeypatch):
-    import adhfit.fitting.bayes.surrogate as surrogate
+    import adhfit.fitting.stand_in as surrogate
     monkeypatch.setattr(surrogate, "MAX_SD", -1.0)  # no stand-in can pass: the exact model is sampled
     r, check = _run()
     assert check is not None and not check["passed"] and "varies by" in check["reason"]

@@ -291,10 +291,19 @@ class CurveModel:
                 failure = err
         if pcs is None:
             raise ModelDomainError(f"no history: {failure}", self._named(*key)) from None
-        if len(self._cache) >= 8:
+        if len(self._cache) >= 16:
             self._cache.pop(next(iter(self._cache)))
         self._cache[key] = pcs
         return pcs
+
+    def split_before(self, j: int) -> CurveModel:
+        """This model with the detachment fixed before row ``j``, sharing the histories computed so far (the
+        split decides which rows are attached, not the history; an exact history is worth keeping)."""
+        out = CurveModel(self.curve, self.scene, self.slip, points=self.points, fixed_split=True,
+                         segments=self.segments.split_before(j, self.force), membrane=self.membrane)
+        out._cache = self._cache
+        out.n_histories, out.n_evaluations = self.n_histories, self.n_evaluations
+        return out
 
     def _history(self, kw: dict, points: int):
         """One history as arrays (no table), from the membrane model's registry entry (one attempt: the
@@ -329,7 +338,7 @@ class CurveModel:
         unloading_shift : float
             Moves the unloading branch (and its turning point) by this much in the control group (δ/b
             or p): the exact membrane's stand-in aligns this model's fold with the exact one's
-            (:mod:`.bayes.surrogate`).
+            (:mod:`.stand_in`).
 
         Raises
         ------

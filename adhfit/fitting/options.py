@@ -65,7 +65,7 @@ class FitOptions:
         Likelihood-profile intervals of the reported fit (least squares).
     stand_in : bool
         MCMC with the exact membrane: sample through the large-stretch model plus the exact model's
-        difference, checked on posterior draws (:mod:`.bayes.surrogate`; the exact posterior is sampled
+        difference, checked on posterior draws (:mod:`.stand_in`; the exact posterior is sampled
         directly when the check fails).  False: always sample the exact model (~10x slower).
     thin : bool
         Fit a curve of more than 6,000 rows as ~2,000 bins of consecutive rows (their means; the

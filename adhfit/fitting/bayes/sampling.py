@@ -30,7 +30,7 @@ from ..selection import StudentT, importance_evidence, model_probabilities
 from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
 from ..model import OFFSET_NAME, ModelDomainError
 from .posterior import SHARED, Target, checked_covariance, objective_priors
-from .surrogate import check, stand_in
+from ..stand_in import check, stand_in
 from ..result import Estimate, FitResult
 from ..selection import SCALE, evidence_word
 
@@ -185,7 +185,7 @@ class _SlipJob:
             evidence = importance_evidence(used.log_prior, lambda th: np.array(pmap.map(used.log_likelihood, list(th))),
                                            StudentT.fit(flat, df=5.0, inflate=1.2), cfg["evidence_draws"],
                                            np.random.default_rng(ss_ev))
-            if used is stand:  # ln Z_E = ln Z_S + ln E_S[L_E / L_S] (surrogate.py)
+            if used is stand:  # ln Z_E = ln Z_S + ln E_S[L_E / L_S] (stand_in.py)
                 evidence = dataclasses.replace(evidence, log_evidence=evidence.log_evidence
                                                + check_info["log_mean_ratio"])
             return {"chains": chains, "samples": tg.to_si(flat), "evidence": evidence,
@@ -203,7 +203,7 @@ class _SlipJob:
 
     @staticmethod
     def _stand_in(tg: Target, cov0: np.ndarray) -> Target | None:
-        """The exact membrane's stand-in target (surrogate.py), or None where it does not apply."""
+        """The exact membrane's stand-in target (stand_in.py), or None where it does not apply."""
         sd = np.sqrt(np.clip(np.diag(cov0), 0.0, None))
         fit = stand_in(tg.fit, stderr=dict(zip(tg.internal, map(float, sd))))
         return None if fit is None else Target(fit, tg.names, tg.priors)
@@ -412,7 +412,7 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, stage, path, t_lsq,
                           "about the least-squares optimum, and checked on posterior draws against the exact "
                           "model (diagnostics.exact_stand_in: the log-likelihood ratio's spread and the largest "
                           "force deviation in units of sigma; the exact posterior is sampled directly when the "
-                          "check fails); see adhfit.fitting.bayes.surrogate",
+                          "check fails); see adhfit.fitting.stand_in",
         "model_probabilities": probs,
         "slips": {s: {"parameters": targets[s].names, "diagnostics": diags[s], "evidence": evid[s].as_dict(),
                       "ensemble_seeds": chains[s].seeds, "chain_groups": chains[s].groups,
