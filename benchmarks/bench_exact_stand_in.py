@@ -3,7 +3,7 @@
 Curves made with the exact membrane (tests/exact_curves.py, 330 rows, 0.5 % noise) at λ0 = 2 are fitted
 by ``adhfit.fit(..., method="mcmc")`` with the default membrane (``auto``: it chooses the exact membrane
 here) twice, in fresh processes: with the stand-in (the default: the large-stretch model plus the exact
-model's difference, checked on posterior draws, ``adhfit.fitting.bayes.surrogate``) and with
+model's difference, checked on posterior draws, ``adhfit.fitting.stand_in``) and with
 ``stand_in=False`` (every posterior evaluation an exact history).  For the selected slip condition's
 posterior, the table gives the difference of the means and of the 2.5 / 97.5 % quantiles in units of the
 plain run's posterior standard deviation (targets: means within 0.1, interval ends within 0.2), and the

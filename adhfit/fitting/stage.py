@@ -104,9 +104,9 @@ def _singles(problem, opts, segs, slips) -> dict:
     with the model detaching rows early, is not left there by the other's better start)."""
     singles: dict = {s: [] for s in slips}
     for i, (curve, scene) in enumerate(zip(problem.curves, problem.scenes)):
-        done: dict = {}
+        done, models = {}, {}
         for s in slips:
-            model = CurveModel(curve, scene, s, points=opts.points, segments=segs[i])
+            model = models[s] = CurveModel(curve, scene, s, points=opts.points, segments=segs[i])
             extra = [dict(r.par.si(r.best.params), label=f"the {o} optimum") for o, r in done.items()]
             done[s] = fit_slip(model, sigma=opts.sigma, fit_x_offset=opts.fit_x_offset,
                                fit_force_offset=opts.fit_force_offset, fit_force_drift=opts.fit_force_drift,
@@ -114,8 +114,8 @@ def _singles(problem, opts, segs, slips) -> dict:
         first = slips[0]
         if len(slips) > 1:  # the first condition from the second's optimum
             other = done[slips[1]]
-            model = CurveModel(curve, scene, first, points=opts.points, segments=segs[i])
-            again = fit_slip(model, sigma=opts.sigma, fit_x_offset=opts.fit_x_offset,
+            # the same model: its histories and its data-based start are kept
+            again = fit_slip(models[first], sigma=opts.sigma, fit_x_offset=opts.fit_x_offset,
                              fit_force_offset=opts.fit_force_offset, fit_force_drift=opts.fit_force_drift, n_runs=0,
                              extra_starts=[dict(other.par.si(other.best.params), label=f"the {slips[1]} optimum")])
             if again.best.chisqr < done[first].best.chisqr * (1.0 - 1e-9):
