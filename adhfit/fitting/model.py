@@ -176,6 +176,16 @@ def pieces_from_columns(columns: dict, control: str, counts: tuple = ()) -> Piec
                   retraction=tuple(retraction), columns=columns, counts=(n_mc, n_pin, n_dl), key=key)
 
 
+def _moved(x: np.ndarray, pcs: Pieces, d_onset: float, d_tp: float) -> np.ndarray:
+    """Where to read this model's unloading branch so that its onset of delamination and its turning point
+    appear moved by ``d_onset`` and ``d_tp`` (the loading end fixed): the piecewise-linear map from the
+    moved kinks to the model's own.  A pure shift where the kinks are not strictly ordered."""
+    xm, on, tp = pcs.x_max, pcs.x_onset, pcs.x_tp
+    if not (tp < on < xm and tp + d_tp < on + d_onset < xm):
+        return x - d_tp
+    return np.interp(x, [tp + d_tp, on + d_onset, xm], [tp, on, xm])  # beyond the fold: clamped there
+
+
 # ----------------------------------------------------------------------------------------------
 # the model
 
@@ -320,7 +330,8 @@ class CurveModel:
         return 1.0 / (sc.length if self.control == "displacement" else sc.pressure)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
-                force_offset: float = 0.0, force_drift: float = 0.0, unloading_shift: float = 0.0) -> np.ndarray:
+                force_offset: float = 0.0, force_drift: float = 0.0,
+                unloading_shift: tuple[float, float] | None = None) -> np.ndarray:
         """Predicted force at every measured row, N (compressive positive).
 
         Parameters
@@ -335,10 +346,11 @@ class CurveModel:
             Added to the predicted force (load-cell zero at the first row), N.
         force_drift : float
             A linear drift of the zero from the first row to the last, N (added in row order).
-        unloading_shift : float
-            Moves the unloading branch (and its turning point) by this much in the control group (δ/b
-            or p): the exact membrane's stand-in aligns this model's fold with the exact one's
-            (:mod:`.stand_in`).
+        unloading_shift : (float, float), optional
+            Moves the unloading branch's kinks, the onset of delamination and the turning point, by these
+            amounts in the control group (δ/b or p), the loading end staying put (the branch is read
+            through the piecewise-linear map between them): the exact membrane's stand-in puts this
+            model's kinks where the exact model has them (:mod:`.stand_in`).
 
         Raises
         ------
@@ -350,7 +362,10 @@ class CurveModel:
         xd = self.dimensionless_x(mu_h, x_offset)
         f = np.zeros(xd.shape)
         f[self._loading] = pcs.f_loading(xd[self._loading])
-        f[self._attached] = pcs.f_unloading(xd[self._attached] - unloading_shift)
+        xa = xd[self._attached]
+        if unloading_shift is not None:
+            xa = _moved(xa, pcs, *unloading_shift)
+        f[self._attached] = pcs.f_unloading(xa)
         if not self.fixed_split:
             f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
         out = f * self._scales(float(mu_h)).force + force_offset

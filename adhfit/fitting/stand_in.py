@@ -60,11 +60,12 @@ class CorrectedModel:
     Answers what the residual asks of a model (:func:`.lsq.residual_function`: ``force``, ``jump``,
     :meth:`predict`, :meth:`turning_point`) for a fixed row split.
 
-    The unloading branch ends in a fold (the force's slope is infinite at the turning point), and the two
-    models' folds sit at slightly different control values: a row next to them differs by a square root
-    that is far from linear in the parameters.  So the large-stretch branch is first moved onto the exact
-    turning point (``unloading_shift``: δ(q) = x_tp,E - x_tp,L, itself linear about q0), and only the
-    smooth remainder is corrected.
+    The unloading branch has a kink (the onset of delamination) and ends in a fold (the force's slope is
+    infinite at the turning point), and the two models' kinks sit at slightly different control values: a
+    row next to them differs by an amount far from linear in the parameters (a square root at the fold).
+    So the large-stretch branch is first read through the piecewise-linear map that puts its onset and its
+    turning point onto the exact model's (``unloading_shift``: the two gaps, each linear about q0), and
+    only the smooth remainder is corrected.
 
     Parameters
     ----------
@@ -85,9 +86,9 @@ class CorrectedModel:
         self.q0 = _q(si0["work_of_adhesion"], si0["mu_h"], si0["x_offset"])
         self.steps = np.asarray(steps, float)
         stencil = [self.q0] + [self.q0 + sign * h * e for h, e in zip(self.steps, np.eye(3)) for sign in (1.0, -1.0)]
-        fold = [self._fold_gap(q) for q in stencil]
-        self.delta0 = fold[0]
-        self.G = np.array([(fold[1 + 2 * i] - fold[2 + 2 * i]) / (2 * h) for i, h in enumerate(self.steps)])
+        kinks = np.array([self._kink_gaps(q) for q in stencil])  # (onset, turning point) gaps at each q
+        self.delta0 = kinks[0]
+        self.G = np.column_stack([(kinks[1 + 2 * i] - kinks[2 + 2 * i]) / (2 * h) for i, h in enumerate(self.steps)])
         diff = [self._difference(q) for q in stencil]
         self.c0 = diff[0]
         self.C = np.column_stack([(diff[1 + 2 * i] - diff[2 + 2 * i]) / (2 * h) for i, h in enumerate(self.steps)])
@@ -99,13 +100,15 @@ class CorrectedModel:
     def _wmo(q: np.ndarray) -> tuple[float, float, float]:
         return math.exp(q[0]), math.exp(q[1]), float(q[2])
 
-    def _fold_gap(self, q: np.ndarray) -> float:
-        """x_tp,E - x_tp,L in the control group (δ/b or p) at q."""
+    def _kink_gaps(self, q: np.ndarray) -> tuple[float, float]:
+        """(x_onset,E - x_onset,L, x_tp,E - x_tp,L) in the control group (δ/b or p) at q."""
         w, mu, off = self._wmo(q)
-        return float(self.exact.pieces(w, mu, off).x_tp - self.cheap.pieces(w, mu, off).x_tp)
+        e, c = self.exact.pieces(w, mu, off), self.cheap.pieces(w, mu, off)
+        return float(e.x_onset - c.x_onset), float(e.x_tp - c.x_tp)
 
-    def _shift(self, q: np.ndarray) -> float:
-        return float(self.delta0 + self.G @ (q - self.q0))
+    def _shift(self, q: np.ndarray) -> tuple[float, float]:
+        d = self.delta0 + self.G @ (q - self.q0)
+        return float(d[0]), float(d[1])
 
     def _difference(self, q: np.ndarray) -> np.ndarray:
         w, mu, off = self._wmo(q)
@@ -131,7 +134,7 @@ class CorrectedModel:
         """The stand-in's turning point: the large-stretch one moved by δ(q) (the force is the large-stretch one's)."""
         x, f = self.cheap.turning_point(work_of_adhesion, mu_h, x_offset)
         per_group = float(self.cheap.dimensionless_x(mu_h, 0.0, np.ones(1))[0])  # control group per measured unit
-        return float(x + self._shift(_q(work_of_adhesion, mu_h, x_offset)) / per_group), f
+        return float(x + self._shift(_q(work_of_adhesion, mu_h, x_offset))[1] / per_group), f
 
 
 def stand_in(fit: ObjectiveFit, stderr: dict | None = None) -> ObjectiveFit | None:
@@ -151,12 +154,9 @@ def stand_in(fit: ObjectiveFit, stderr: dict | None = None) -> ObjectiveFit | No
     new = []
     for i, m in enumerate(members):
         si0 = {**shared, **offsets[i]}
-        names = [fit.spar.name(b, i) if fit.joint else b for b in ("x_offset",)]
-        steps = [0.5 * (stderr.get("ln_work_of_adhesion") or 0.0) or 1e-3,
-                 0.5 * (stderr.get("ln_mu_h") or 0.0) or 1e-3,
-                 0.5 * (stderr.get(names[0]) or 0.0) * m.par.x_scale or 1e-4 * m.par.x_scale]
+        offset = fit.spar.name("x_offset", i) if fit.joint else "x_offset"
         try:
-            model = CorrectedModel(m.model, si0, steps)
+            model = CorrectedModel(m.model, si0, _steps(m.par, stderr, offset))
         except ModelDomainError:
             return None
         single = dataclasses.replace(m.single, model=model) if m.single is not None else None
@@ -196,11 +196,13 @@ def check(exact_target, stand_target, flat: np.ndarray, sigma: float, scale: flo
     return out
 
 
-def _steps(par, si: dict, stderr: dict) -> list[float]:
-    """Central-difference steps in q: half a standard error (internal ``ln_*`` and scaled offset)."""
-    return [0.5 * (stderr.get("ln_work_of_adhesion") or 0.0) or 1e-3,
-            0.5 * (stderr.get("ln_mu_h") or 0.0) or 1e-3,
-            (0.5 * (stderr.get("x_offset") or 0.0) or 1e-4) * par.x_scale]
+def _steps(par, stderr: dict, offset: str = "x_offset") -> list[float]:
+    """Central-difference steps in q: half a standard error of ln W_ad, ln μh and the offset (internal
+    names; the offset's is scaled by the control range), a small default where there is none."""
+    def half(name: str, default: float) -> float:
+        v = stderr.get(name)
+        return 0.5 * float(v) if v is not None and math.isfinite(v) and v > 0 else default
+    return [half("ln_work_of_adhesion", 1e-3), half("ln_mu_h", 1e-3), half(offset, 1e-4) * par.x_scale]
 
 
 def minimise_exact(exact: CurveModel, par, scale: float, sigma: float, params, *, scale_covar: bool,
@@ -234,11 +236,11 @@ def minimise_exact(exact: CurveModel, par, scale: float, sigma: float, params, *
     from .lsq import minimise, residual_function  # noqa: PLC0415 - lsq is below this module
     cur, last = params, None
     if exact.fixed_split:
-        scale_q = 2.0 * np.array(_steps(par, {}, stderr))  # one standard error
+        scale_q = 2.0 * np.array(_steps(par, stderr))  # one standard error
         for _ in range(rounds):
             si = at if (last is None and at is not None) else par.si(cur)
             try:
-                stand = CorrectedModel(exact, si, _steps(par, si, stderr))
+                stand = CorrectedModel(exact, si, _steps(par, stderr))
             except ModelDomainError:
                 break
             last = si
