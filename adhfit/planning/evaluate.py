@@ -1,0 +1,101 @@
+"""One protocol's prediction: interval widths, slip-verdict probabilities, domain and membrane model.
+
+For each true slip condition the noiseless curve (:mod:`.truth`) gives the Fisher widths
+(:mod:`.information`) and the other condition's misfit (:mod:`.verdict`).  The membrane model is the
+scene's; under ``auto`` it is the one the fit would choose at the truth (the fit's own rule,
+:func:`adhfit.fitting.membrane.approximation_effect`: the exact membrane when the large-stretch
+force is off by more than half σ at some row, or shifts W_ad or μh by more than half a standard error),
+and the prediction is then made with that membrane's model.
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import AdhfitError
+from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
+from ..fitting.membrane import EXACT_POINTS, approximation_effect
+from ..fitting.starts import Start
+from .information import jacobian, log_widths
+from .protocols import Protocol
+from .truth import OutOfDomain, loading_end, noiseless_test
+from .verdict import misfit, verdict_probabilities
+
+__all__ = ["predict", "auto_membrane", "OTHER"]
+
+OTHER = {"no-slip": "frictionless", "frictionless": "no-slip"}
+
+
+def auto_membrane(truth) -> str:
+    """The membrane model ``auto`` would fit to this noiseless curve at its noise level."""
+    par, sigma = truth.par, truth.sigma
+    best = minimise(residual_function(truth.model, par, sigma, sigma), par.params(Start(truth.values)),
+                    scale_covar=False, tol=COARSE_TOL)
+    raw = RawFit(slip=truth.model.slip, best=best, model=truth.model, par=par, scale=sigma, sigma_given=True,
+                 starts=[])
+    try:
+        effect = approximation_effect(raw, sigma)
+    except AdhfitError:  # no exact history at the truth: the fit then takes the exact membrane
+        return "exact"
+    return "exact" if effect.resolved() else "large-stretch"
+
+
+def _one_slip(protocol, slip, w, mu, x_max, membrane) -> dict:
+    truth = noiseless_test(protocol, slip, w, mu, x_max)
+    chosen = membrane
+    if membrane == "auto":
+        chosen = auto_membrane(truth)
+    if chosen != "large-stretch":
+        truth = noiseless_test(protocol, slip, w, mu, x_max, membrane=chosen, points=EXACT_POINTS)
+    try:
+        r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
+    except ValueError as err:
+        raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
+    widths = log_widths(J, truth.values)
+    m = misfit(truth, OTHER[slip], r, J)
+    probs = verdict_probabilities(m)
+    return {"widths": widths, "verdict": probs, "membrane": chosen, "sigma": truth.sigma,
+            "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(r.size),
+            "other_optimum": m.values}
+
+
+def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str = "auto") -> dict:
+    """The plan.json entry of one protocol (docs/contracts.md A8) plus the details behind it.
+
+    Parameters
+    ----------
+    protocol : Protocol
+    slips : tuple of str
+        The true slip conditions considered.
+    w, mu : float
+        The guessed W_ad (J/m²) and μh (N/m).
+    membrane : {"auto", "large-stretch", "exact"}
+    """
+    entry = {"settings": protocol.settings(), "ci95_width": {"work_of_adhesion": None, "mu_h": None},
+             "p_slip_decided": {s: None for s in slips}, "p_wrong_slip": {s: None for s in slips},
+             "in_domain": False, "membrane": None}
+    try:
+        x_max = loading_end(protocol, slips[0], w, mu)
+        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane) for s in slips}
+    except OutOfDomain as err:
+        entry["why_not"] = str(err)
+        return entry
+    entry["in_domain"] = True
+    entry["settings"]["control_max"] = x_max
+    for name in ("work_of_adhesion", "mu_h"):  # the worse of the true conditions: what the lab can count on
+        entry["ci95_width"][name] = max(p["widths"][name]["width"] for p in per.values())
+    for s, p in per.items():
+        entry["p_slip_decided"][s] = p["verdict"]["decided"]
+        entry["p_wrong_slip"][s] = p["verdict"]["wrong"]
+    membranes = {p["membrane"] for p in per.values()}
+    entry["membrane"] = "exact" if "exact" in membranes else membranes.pop()
+    entry["sigma_force"] = max(p["sigma"] for p in per.values())
+    entry["by_slip"] = {s: {"ci95_width": {k: v["width"] for k, v in p["widths"].items()},
+                            "relative_se": {k: v["relative_se"] for k, v in p["widths"].items()},
+                            "evidence": p["verdict"]["words"], "delta_bic_median": p["verdict"]["delta_bic"],
+                            "delta_bic_90": p["verdict"]["delta_bic_range"], "misfit_chi2": p["verdict"]["misfit"],
+                            "sigma_force": p["sigma"], "contact_radius_max": p["a_max"] * protocol.scene.membrane_radius,
+                            "nuisances": p["nuisances"], "membrane": p["membrane"]}
+                        for s, p in per.items()}
+    if not all(math.isfinite(v) for v in entry["ci95_width"].values()):
+        entry["why_not"] = "the data of this protocol cannot determine W_ad or μh (singular information)"
+    return entry
