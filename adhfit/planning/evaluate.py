@@ -74,6 +74,8 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
              "p_slip_decided": {s: None for s in slips}, "p_wrong_slip": {s: None for s in slips},
              "in_domain": False, "membrane": None}
     try:
+        if protocol.invalid:
+            raise OutOfDomain(protocol.invalid[2])
         x_max = loading_end(protocol, slips[0], w, mu)
         per = {s: _one_slip(protocol, s, w, mu, x_max, membrane) for s in slips}
     except OutOfDomain as err:

@@ -114,6 +114,10 @@ class Protocol:
     rows : int
     noise : float
         Force noise σ over the peak force.
+    invalid : tuple
+        ``(setting, value, message)`` when the scene cannot take the value (e.g. a gap that keeps the
+        membrane off the substrate): the protocol is then outside the model's domain, ``scene`` keeps
+        the last valid value and the settings show the requested one.
     """
 
     scene: Scene
@@ -121,9 +125,12 @@ class Protocol:
     end_value: float
     rows: int
     noise: float
+    invalid: tuple = ()
 
     def value(self, name: str) -> float:
         """The value of a setting (SI), for the maps."""
+        if self.invalid and self.invalid[0] == name:
+            return float(self.invalid[1])
         if name in ("pressure", "gap"):
             return float(getattr(self.scene, name))
         if name in END_NAMES:
@@ -140,12 +147,17 @@ class Protocol:
         if self.end == "a_max":
             out["contact_radius_max"] = float(self.end_value * sc.membrane_radius)
         out.update(rows=int(self.rows), noise=float(self.noise))
+        if self.invalid:
+            out[self.invalid[0]] = float(self.invalid[1])
         return out
 
     def replace(self, name: str, value: float) -> "Protocol":
         """This protocol with one setting changed."""
         if name in ("pressure", "gap"):
-            return dataclasses.replace(self, scene=dataclasses.replace(self.scene, **{name: float(value)}))
+            try:
+                return dataclasses.replace(self, scene=dataclasses.replace(self.scene, **{name: float(value)}))
+            except InputError as err:  # outside the scene's domain: kept as a protocol the model cannot run
+                return dataclasses.replace(self, invalid=(name, float(value), str(err)))
         if name in END_NAMES:
             return dataclasses.replace(self, end=name, end_value=float(value))
         if name == "rows":
