@@ -85,7 +85,7 @@ def parse_noise(value: Any) -> float:
     return check_noise(v)
 
 
-def _end(scene, ends: dict, mu: float) -> tuple[str, float]:
+def _end(scene, ends: dict, mu: float) -> tuple[str, float, str]:
     from ..fitting.synthetic import parse_end  # noqa: PLC0415
     given = {k: v for k, v in ends.items() if v is not None}
     if len(given) > 1:
@@ -95,7 +95,7 @@ def _end(scene, ends: dict, mu: float) -> tuple[str, float]:
         for key, name in _SCENE_END.items():
             value = getattr(scene, key)
             if value is not None:
-                return name, value / scene.membrane_radius if name == "a_max" else float(value)
+                return name, value / scene.membrane_radius if name == "a_max" else float(value), f"[test] {key}"
         raise InputError("--a-max", None, "a loading end: --a-max A, --delta-max X or --pressure-max Q",
                          "Or set [test] contact_radius_max, displacement_max or pressure_max in the scene.")
     (key, value), = given.items()
@@ -113,9 +113,18 @@ def _end(scene, ends: dict, mu: float) -> tuple[str, float]:
                          "A1) or a value with a unit", str(err)) from None
     if not (math.isfinite(group) and group > 0):
         raise InputError(f"--{key.replace('_', '-')}", value, "a positive loading end")
+    flag = f"--{key.replace('_', '-')}"
     if name == "a_max":
-        return name, group
-    return name, group * sc.length if name == "displacement_max" else float(sc.from_p(group))
+        return name, group, flag
+    return name, group * sc.length if name == "displacement_max" else float(sc.from_p(group)), flag
+
+
+def _plain(value: Any) -> Any:
+    """A bare number written as text ("0.3") is SI, as on the command line of ``adhfit simulate``."""
+    try:
+        return float(value) if isinstance(value, str) else value
+    except ValueError:
+        return value
 
 
 def _slips(slip: str) -> tuple:
@@ -183,8 +192,8 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
     """
     from ..scene import Scene, load_scene  # noqa: PLC0415
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
-    w = parse_quantity(work_of_adhesion, "energy_per_area", name="--work-of-adhesion")
-    mu = parse_quantity(mu_h, "force_per_length", name="--mu-h")
+    w = parse_quantity(_plain(work_of_adhesion), "energy_per_area", name="--work-of-adhesion")
+    mu = parse_quantity(_plain(mu_h), "force_per_length", name="--mu-h")
     for flag, v in (("--work-of-adhesion", w), ("--mu-h", mu)):
         if not (math.isfinite(v) and v > 0):
             raise InputError(flag, v, "a positive value, e.g. '0.4 J/m^2' or '2 N/m'")
@@ -198,7 +207,7 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
     if membrane not in ("auto", "large-stretch", "exact"):
         raise InputError("--membrane", membrane, "one of 'auto', 'large-stretch', 'exact'")
     sc.scales(mu)
-    end, end_value = _end(sc, {"a_max": a_max, "delta_max": delta_max, "pressure_max": pressure_max}, mu)
+    end, end_value, end_flag = _end(sc, {"a_max": a_max, "delta_max": delta_max, "pressure_max": pressure_max}, mu)
     grid_spec = parse_vary(vary, sc.control)
     base = Protocol(scene=sc, end=end, end_value=end_value, rows=n_rows, noise=sigma)
     protocols, axes = grid(base, grid_spec)
@@ -207,11 +216,13 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
     for p, e in zip(protocols, entries):
         e["grid"] = {n: p.value(n) for n in names}
     if not any(e["in_domain"] for e in entries):
-        flag = "--vary " + names[0] if names else f"--{end.replace('_', '-')}"
+        flag = "--vary " + names[0] if names else end_flag
         why = entries[0].get("why_not", "")
-        raise InputError(flag, vary if names else end_value, "a protocol inside the model's domain",
-                         f"None of the {len(entries)} protocol(s) is ({why}); change the loading end, the pressure "
-                         f"or gap, or the guessed W_ad and μh.")
+        given = {"a_max": a_max, "delta_max": delta_max, "pressure_max": pressure_max}
+        value = vary if names else next((v for v in given.values() if v is not None), end_value)
+        raise InputError(flag, value, "a setting that keeps the test inside the model's domain",
+                         f"All {len(entries)} protocol(s) leave it; the first because {why.rstrip('.')}. Fix: change "
+                         f"the loading end, the pressure or gap, or the guessed W_ad and μh.")
     index, why = recommend(entries, w, target_precision)
     inputs = {"scene": str(sc.source) if sc.source else None, "work_of_adhesion": w, "mu_h": mu, "noise": sigma,
               "rows": n_rows, "slips": list(slips), "loading_end": {end: end_value}, "target_precision": target_precision,
