@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..errors import AdhfitError
 from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
 from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
-from .information import jacobian, log_widths
+from .information import jacobian, log_widths, reduced_information
 from .protocols import Protocol
 from .truth import OutOfDomain, loading_end, noiseless_test
 from .verdict import misfit, verdict_probabilities
@@ -53,7 +55,12 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane) -> dict:
     widths = log_widths(J, truth.values)
     m = misfit(truth, OTHER[slip], r, J)
     probs = verdict_probabilities(m)
-    return {"widths": widths, "verdict": probs, "membrane": chosen, "sigma": truth.sigma,
+    try:
+        info = reduced_information(J).tolist()
+    except np.linalg.LinAlgError:
+        info = None
+    return {"widths": widths, "verdict": probs, "membrane": chosen, "sigma": truth.sigma, "information": info,
+            "misfit": m.to_dict(),
             "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(r.size),
             "other_optimum": m.values}
 
@@ -96,7 +103,8 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
                             "evidence": p["verdict"]["words"], "delta_bic_median": p["verdict"]["delta_bic"],
                             "delta_bic_90": p["verdict"]["delta_bic_range"], "misfit_chi2": p["verdict"]["misfit"],
                             "sigma_force": p["sigma"], "contact_radius_max": p["a_max"] * protocol.scene.membrane_radius,
-                            "nuisances": p["nuisances"], "membrane": p["membrane"]}
+                            "nuisances": p["nuisances"], "membrane": p["membrane"],
+                            "information": p["information"], "misfit": p["misfit"]}
                         for s, p in per.items()}
     if not all(math.isfinite(v) for v in entry["ci95_width"].values()):
         entry["why_not"] = "the data of this protocol cannot determine W_ad or μh (singular information)"

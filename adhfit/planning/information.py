@@ -31,7 +31,8 @@ from ..fitting.lsq import pull_off_term, residual_function
 from ..fitting.objective import Values
 from ..fitting.starts import Start
 
-__all__ = ["internal", "residual_at", "jacobian", "log_widths", "pull_off_curvature", "Z95", "STEP"]
+__all__ = ["internal", "residual_at", "jacobian", "log_widths", "reduced_information", "widths_from_information",
+           "pull_off_curvature", "Z95", "STEP"]
 
 #: two-sided 95 % normal quantile
 Z95 = 1.959963984540054
@@ -124,4 +125,29 @@ def log_widths(J: np.ndarray, values: dict) -> dict:
         v = values[name]
         width = v * (math.exp(min(Z95 * se, 700)) - math.exp(-Z95 * se)) if math.isfinite(se) else math.inf
         out[name] = {"width": width, "relative_se": se}
+    return out
+
+
+def reduced_information(J: np.ndarray) -> np.ndarray:
+    """The 2x2 information about (ln W_ad, ln μh) with the nuisances (the other columns) profiled out:
+    I_aa − I_ab I_bb⁻¹ I_ba (a test series adds these over its curves, each with its own nuisances)."""
+    info = J.T @ J
+    a, b = info[:2, :2], info[:2, 2:]
+    if info.shape[0] == 2:
+        return a
+    return a - b @ np.linalg.solve(info[2:, 2:], b.T)
+
+
+def widths_from_information(info: np.ndarray, values: dict) -> dict:
+    """:func:`log_widths` from a 2x2 information matrix about (ln W_ad, ln μh)."""
+    try:
+        cov = np.linalg.inv(info)
+    except np.linalg.LinAlgError:
+        cov = np.full((2, 2), np.inf)
+    out = {}
+    for i, name in enumerate(("work_of_adhesion", "mu_h")):
+        se = math.sqrt(cov[i, i]) if np.isfinite(cov[i, i]) and cov[i, i] > 0 else math.inf
+        v = values[name]
+        out[name] = {"width": v * (math.exp(min(Z95 * se, 700)) - math.exp(-Z95 * se)) if math.isfinite(se) else math.inf,
+                     "relative_se": se}
     return out

@@ -31,7 +31,8 @@ from ..fitting.selection import DECISIVE, POSITIVE, STRONG
 from ..fitting.starts import Start
 from .information import jacobian
 
-__all__ = ["misfit", "Misfit", "verdict_probabilities", "DRAWS", "SEED", "WORDS"]
+__all__ = ["misfit", "Misfit", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
+           "WORDS"]
 
 #: draws of the ΔBIC distribution, and their fixed seed (a plan is reproducible)
 DRAWS = 20_000
@@ -60,9 +61,14 @@ class Misfit:
         The other condition's optimum (SI).
     """
 
-    def __init__(self, lam, linear_var, quadratic_var, n, k, chisqr_true, values) -> None:
+    def __init__(self, lam, linear_var, quadratic_var, n, k, chisqr_true, values=None) -> None:
         self.lam, self.linear_var, self.quadratic_var = float(lam), float(linear_var), float(quadratic_var)
-        self.n, self.k, self.chisqr_true, self.values = int(n), int(k), float(chisqr_true), dict(values)
+        self.n, self.k, self.chisqr_true, self.values = int(n), int(k), float(chisqr_true), dict(values or {})
+
+    def to_dict(self) -> dict:
+        """The numbers that define the ΔBIC distribution (plan.json ``by_slip``; :mod:`.series` sums them)."""
+        return {"lam": self.lam, "linear_var": self.linear_var, "quadratic_var": self.quadratic_var, "n": self.n,
+                "k": self.k, "chisqr_true": self.chisqr_true}
 
 
 def _hat_overlap(J1: np.ndarray, J2: np.ndarray) -> float:
@@ -91,6 +97,25 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
     return Misfit(lam, lin, quad, r_true.size, k, chi_t, values)
 
 
+def sample_delta_bic(m: Misfit, rng: np.random.Generator, draws: int = DRAWS) -> np.ndarray:
+    """Draws of the fit's ΔBIC (true condition's favour positive) for one curve (module docstring)."""
+    u = m.chisqr_true + rng.chisquare(max(m.n - m.k, 1), draws)
+    d = m.lam + math.sqrt(m.linear_var) * rng.standard_normal(draws) + \
+        math.sqrt(m.quadratic_var) * rng.standard_normal(draws)
+    d = np.maximum(d, -u * (1.0 - 1e-12))
+    return m.n * np.log1p(d / u)
+
+
+def word_probabilities(dbic: np.ndarray) -> dict:
+    """P(each word of :data:`WORDS`) from ΔBIC draws."""
+    p = {"very strong": np.mean(dbic > DECISIVE), "strong": np.mean((dbic > STRONG) & (dbic <= DECISIVE)),
+         "positive": np.mean((dbic >= POSITIVE) & (dbic <= STRONG)), "cannot tell": np.mean(np.abs(dbic) < POSITIVE),
+         "wrong: positive": np.mean((dbic <= -POSITIVE) & (dbic >= -STRONG)),
+         "wrong: strong": np.mean((dbic < -STRONG) & (dbic >= -DECISIVE)),
+         "wrong: very strong": np.mean(dbic < -DECISIVE)}
+    return {k: float(v) for k, v in p.items()}
+
+
 def verdict_probabilities(m: Misfit) -> dict:
     """P(each evidence word) for the true condition, from the sampled ΔBIC (module docstring).
 
@@ -101,18 +126,9 @@ def verdict_probabilities(m: Misfit) -> dict:
         condition)), ``wrong`` (P(ΔBIC > 10 for the other)), ``delta_bic`` (the median), ``delta_bic_range``
         (the 5 and 95 % quantiles; negative: the other condition favoured), ``misfit`` (λ).
     """
-    rng = np.random.default_rng(SEED)
-    u = m.chisqr_true + rng.chisquare(max(m.n - m.k, 1), DRAWS)
-    d = m.lam + math.sqrt(m.linear_var) * rng.standard_normal(DRAWS) + \
-        math.sqrt(m.quadratic_var) * rng.standard_normal(DRAWS)
-    d = np.maximum(d, -u * (1.0 - 1e-12))
-    dbic = m.n * np.log1p(d / u)
-    p = {"very strong": np.mean(dbic > DECISIVE), "strong": np.mean((dbic > STRONG) & (dbic <= DECISIVE)),
-         "positive": np.mean((dbic >= POSITIVE) & (dbic <= STRONG)), "cannot tell": np.mean(np.abs(dbic) < POSITIVE),
-         "wrong: positive": np.mean((dbic <= -POSITIVE) & (dbic >= -STRONG)),
-         "wrong: strong": np.mean((dbic < -STRONG) & (dbic >= -DECISIVE)),
-         "wrong: very strong": np.mean(dbic < -DECISIVE)}
+    dbic = sample_delta_bic(m, np.random.default_rng(SEED))
+    p = word_probabilities(dbic)
     q05, q50, q95 = np.quantile(dbic, [0.05, 0.5, 0.95])
-    return {"words": {k: float(v) for k, v in p.items()}, "decided": float(p["very strong"]),
+    return {"words": p, "decided": float(p["very strong"]),
             "wrong": float(p["wrong: very strong"]), "delta_bic": float(q50),
             "delta_bic_range": [float(q05), float(q95)], "misfit": m.lam}
