@@ -36,7 +36,7 @@ PROTOCOLS = [
     ("pres-900-ns-5%", "flat_pressure_no-slip", "pressure_max", 900.0, "no-slip", 0.05),
     ("pres-900-fr-5%", "flat_pressure_no-slip", "pressure_max", 900.0, "frictionless", 0.05),
 ]
-QUICK = [PROTOCOLS[0], PROTOCOLS[6]]
+QUICK = [PROTOCOLS[0], PROTOCOLS[4]]
 W_AD, MU_H, ROWS = 0.3, 1.5, 300
 ROOT = Path(__file__).resolve().parents[1]
 
