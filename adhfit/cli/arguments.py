@@ -174,6 +174,9 @@ def add_plan_arguments(subparsers) -> argparse.ArgumentParser:
                         "noise), e.g. pressure=0.5:2kPa:10,a_max=0.1:0.4:10")
     p.add_argument("--global", dest="global_k", type=int, default=None, metavar="K",
                    help="test series: the best set of K values of the varied pressure (or gap)")
+    p.add_argument("--radius-noise", default=None, metavar="FRACTION",
+                   help="a camera films the contact radius with this noise (fraction of the largest contact radius, "
+                        "e.g. 1%%): its information joins the widths (single tests and --global)")
     p.add_argument("--target-precision", type=float, default=0.1, metavar="FRACTION",
                    help="requested W_ad precision: expected 95 %% interval width over W_ad (default 0.1)")
     p.add_argument("--membrane", choices=membrane_choices(), default=None,

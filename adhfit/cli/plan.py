@@ -15,7 +15,8 @@ def run_plan(args) -> int:
     result = plan(args.scene, work_of_adhesion=args.work_of_adhesion, mu_h=args.mu_h, noise=args.noise,
                   slip=args.slip, rows=args.rows, a_max=args.a_max, delta_max=args.delta_max,
                   pressure_max=args.pressure_max, vary=args.vary, global_k=args.global_k,
-                  target_precision=args.target_precision, membrane=args.membrane, workers=args.workers)
+                  target_precision=args.target_precision, membrane=args.membrane, workers=args.workers,
+                  radius_noise=args.radius_noise)
     files = result.write(args.output)
     n = len(result.protocols)
     inside = sum(bool(e["in_domain"]) for e in result.protocols)

@@ -75,14 +75,14 @@ class Plan:
         return write_plan(self, Path(outdir))
 
 
-def parse_noise(value: Any) -> float:
+def parse_noise(value: Any, flag: str = "--noise") -> float:
     """``0.02``, ``"0.02"`` or ``"2%"`` -> 0.02, checked to lie in (0, 1]."""
     text = str(value).strip()
     try:
         v = float(text[:-1]) / 100.0 if text.endswith("%") else float(text)
     except ValueError:
-        raise InputError("--noise", value, "a fraction of the peak force in (0, 1], e.g. 0.02 or 2%") from None
-    return check_noise(v)
+        raise InputError(flag, value, "a fraction in (0, 1], e.g. 0.02 or 2%") from None
+    return check_noise(v, flag)
 
 
 def _end(scene, ends: dict, mu: float) -> tuple[str, float, str]:
@@ -133,24 +133,26 @@ def _slips(slip: str) -> tuple:
     return ("no-slip", "frictionless") if slip == "both" else (slip,)
 
 
-def _run(protocols: list, slips: tuple, w: float, mu: float, membrane: str, workers: int) -> list[dict]:
+def _run(protocols: list, slips: tuple, w: float, mu: float, membrane: str, workers: int,
+         radius_noise: float | None = None) -> list[dict]:
     from .evaluate import predict  # noqa: PLC0415
     if workers <= 1 or len(protocols) < 4:
-        return [predict(p, slips, w, mu, membrane) for p in protocols]
+        return [predict(p, slips, w, mu, membrane, radius_noise) for p in protocols]
     import concurrent.futures as cf  # noqa: PLC0415
     import multiprocessing  # noqa: PLC0415
     ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
     with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
         chunk = max(1, len(protocols) // (4 * workers))
         return list(pool.map(predict, protocols, [slips] * len(protocols), [w] * len(protocols),
-                             [mu] * len(protocols), [membrane] * len(protocols), chunksize=chunk))
+                             [mu] * len(protocols), [membrane] * len(protocols), [radius_noise] * len(protocols),
+                             chunksize=chunk))
 
 
 def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise: float | str,
          slip: str = "both", rows: int = 300, a_max: float | str | None = None,
          delta_max: float | str | None = None, pressure_max: float | str | None = None,
          vary: str | dict | None = None, global_k: int | None = None, target_precision: float = DEFAULT_TARGET,
-         membrane: str | None = None, workers: int = 1) -> Plan:
+         membrane: str | None = None, workers: int = 1, radius_noise: float | str | None = None) -> Plan:
     """Predict what the fit will find for candidate protocols, and recommend one.
 
     Parameters
@@ -180,6 +182,10 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
         Overrides the scene's membrane model.
     workers : int
         Local processes evaluating the protocols.
+    radius_noise : float or str, optional
+        A camera films the contact radius with this noise (a fraction of the largest contact radius, 0.01 or
+        "1%"): the fit's contact-radius block joins the widths (single tests and ``global_k``).  The slip
+        verdict stays force-only (its P is then a lower bound).
 
     Returns
     -------
@@ -211,7 +217,10 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
     grid_spec = parse_vary(vary, sc.control)
     base = Protocol(scene=sc, end=end, end_value=end_value, rows=n_rows, noise=sigma)
     protocols, axes = grid(base, grid_spec)
-    entries = _run(protocols, slips, w, mu, membrane, workers)
+    r_noise = None
+    if radius_noise is not None:
+        r_noise = parse_noise(radius_noise, "--radius-noise")
+    entries = _run(protocols, slips, w, mu, membrane, workers, r_noise)
     names = list(grid_spec)
     for p, e in zip(protocols, entries):
         e["grid"] = {n: p.value(n) for n in names}
@@ -226,7 +235,7 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
     index, why = recommend(entries, w, target_precision)
     inputs = {"scene": str(sc.source) if sc.source else None, "work_of_adhesion": w, "mu_h": mu, "noise": sigma,
               "rows": n_rows, "slips": list(slips), "loading_end": {end: end_value}, "target_precision": target_precision,
-              "membrane": membrane, "vary": {k: list(v) for k, v in grid_spec.items()}, "p_decided_required": 0.9}
+              "membrane": membrane, "radius_noise": r_noise, "vary": {k: list(v) for k, v in grid_spec.items()}, "p_decided_required": 0.9}
     result = Plan(protocols=entries, recommended=index, why=why, axes=dict(zip(names, axes)), inputs=inputs,
                   base=base)
     if global_k is not None:

@@ -17,7 +17,7 @@ from ..errors import AdhfitError
 from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
 from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
-from .information import jacobian, log_widths, reduced_information
+from .information import jacobian, log_widths, radius_jacobian, reduced_information
 from .protocols import Protocol
 from .truth import OutOfDomain, loading_end, noiseless_test
 from .verdict import misfit, verdict_probabilities
@@ -41,7 +41,7 @@ def auto_membrane(truth) -> str:
     return "exact" if effect.resolved() else "large-stretch"
 
 
-def _one_slip(protocol, slip, w, mu, x_max, membrane) -> dict:
+def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict:
     truth = noiseless_test(protocol, slip, w, mu, x_max)
     chosen = membrane
     if membrane == "auto":
@@ -52,6 +52,8 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane) -> dict:
         r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
     except ValueError as err:
         raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
+    if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
+        J = np.vstack([J, radius_jacobian(truth, radius_noise)])
     widths = log_widths(J, truth.values)
     m = misfit(truth, OTHER[slip], r, J)
     probs = verdict_probabilities(m)
@@ -65,7 +67,8 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane) -> dict:
             "other_optimum": m.values}
 
 
-def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str = "auto") -> dict:
+def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str = "auto",
+            radius_noise: float | None = None) -> dict:
     """The plan.json entry of one protocol (docs/contracts.md A8) plus the details behind it.
 
     Parameters
@@ -76,6 +79,9 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
     w, mu : float
         The guessed W_ad (J/m²) and μh (N/m).
     membrane : {"auto", "large-stretch", "exact"}
+    radius_noise : float, optional
+        A filmed contact radius with this noise (a fraction of the largest contact radius): its block joins
+        the widths' information (the slip verdict stays force-only: a lower bound on its P).
     """
     entry = {"settings": protocol.settings(), "ci95_width": {"work_of_adhesion": None, "mu_h": None},
              "p_slip_decided": {s: None for s in slips}, "p_wrong_slip": {s: None for s in slips},
@@ -84,7 +90,7 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
         if protocol.invalid:
             raise OutOfDomain(protocol.invalid[2])
         x_max = loading_end(protocol, slips[0], w, mu)
-        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane) for s in slips}
+        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane, radius_noise) for s in slips}
     except OutOfDomain as err:
         entry["why_not"] = str(err)
         return entry

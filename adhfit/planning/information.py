@@ -31,7 +31,7 @@ from ..fitting.lsq import pull_off_term, residual_function
 from ..fitting.objective import Values
 from ..fitting.starts import Start
 
-__all__ = ["internal", "residual_at", "jacobian", "log_widths", "reduced_information", "widths_from_information",
+__all__ = ["internal", "residual_at", "jacobian", "radius_jacobian", "log_widths", "reduced_information", "widths_from_information",
            "pull_off_curvature", "Z95", "STEP"]
 
 #: two-sided 95 % normal quantile
@@ -151,3 +151,26 @@ def widths_from_information(info: np.ndarray, values: dict) -> dict:
         out[name] = {"width": v * (math.exp(min(Z95 * se, 700)) - math.exp(-Z95 * se)) if math.isfinite(se) else math.inf,
                      "relative_se": se}
     return out
+
+
+def radius_jacobian(truth, radius_noise: float) -> np.ndarray:
+    """Jacobian rows of a filmed contact radius (the fit's second observable,
+    :data:`adhfit.fitting.observables.OBSERVABLES`): (a_measured − a_model)/σ_a at every row in contact,
+    σ_a = ``radius_noise`` × the largest contact radius; the columns of the force offsets are 0."""
+    from ..fitting.observables import contact_radius_model  # noqa: PLC0415
+    model, par = truth.model, truth.par
+    names, theta = internal(par, truth.values)
+
+    def radius(th):
+        si = par.si(Values(zip(names, map(float, th))))
+        return contact_radius_model(model, si["work_of_adhesion"], si["mu_h"], si["x_offset"])
+    a0 = radius(theta)
+    sigma_a = radius_noise * float(np.max(a0))
+    rows = a0 > 0
+    cols = []
+    for i in range(theta.size):
+        up, down = theta.copy(), theta.copy()
+        up[i] += STEP
+        down[i] -= STEP
+        cols.append((radius(up) - radius(down))[rows] / (2.0 * STEP * sigma_a))
+    return np.column_stack(cols)

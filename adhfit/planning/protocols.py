@@ -86,7 +86,8 @@ _ALIASES = {"delta_max": "displacement_max", "p_max": "pressure_max", "points": 
 def check_noise(value: float, flag: str = "--noise") -> float:
     """A force noise fraction in (0, 1]."""
     if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 < value <= 1.0):
-        raise InputError(flag, value, "a fraction of the peak force in (0, 1], e.g. 0.02 or 2%",
+        what = "the largest contact radius" if "radius" in flag else "the peak force"
+        raise InputError(flag, value, f"a fraction of {what} in (0, 1], e.g. 0.02 or 2%",
                          "A plan needs noise: with none every protocol decides everything.")
     return float(value)
 

@@ -11,7 +11,8 @@ P(slip decided) given here is a lower bound.  The set chosen is the one with the
 (then μh) among those that decide the slip with P ≥ 0.9 for every true condition; without one, the set
 with the largest P(slip decided).  All sets are tried up to :data:`MAX_SETS`, greedily beyond.
 
-Not done: the contact radius of a filmed test (the fit's second observable) is not in this information.
+With ``radius_noise`` (a filmed test) each curve's information includes its contact-radius block; the
+slip verdict stays force-only (a lower bound on its P).
 """
 from __future__ import annotations
 
@@ -101,6 +102,7 @@ def best_set(plan, k: int, slips: tuple, w: float, mu: float, membrane: str) -> 
            f"of the shared W_ad {100 * widths['work_of_adhesion'] / w:.3g} %, μh {100 * widths['mu_h'] / mu:.3g} %; "
            f"P(slip decided) at least {min(p.values()):.3f}" +
            ("" if ok else f" — below {P_DECIDED:g}: no set of {k} decides the slip; more curves or less noise") +
-           "; the contact radius is not included (force only)")
+           ("; with the filmed contact radius (the slip verdict from the force alone)"
+            if plan.inputs.get("radius_noise") else "; force only (--radius-noise adds a filmed contact radius)"))
     return {"k": k, "axis": axis, axis: chosen, "protocols": sorted(best), "ci95_width": widths,
             "p_slip_decided_at_least": p, "p_wrong_slip": wrong, "reached": ok, "why": why}
