@@ -17,7 +17,7 @@ from ..errors import AdhfitError
 from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
 from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
-from .information import jacobian, log_widths, radius_jacobian, reduced_information
+from .information import Z95, jacobian, log_widths, radius_jacobian, reduced_information
 from .protocols import Protocol
 from .truth import OutOfDomain, loading_end, noiseless_test
 from .verdict import misfit, verdict_probabilities
@@ -41,6 +41,42 @@ def auto_membrane(truth) -> str:
     return "exact" if effect.resolved() else "large-stretch"
 
 
+def _interval(value: float, rel_se: float) -> tuple[float, float]:
+    return value * math.exp(-Z95 * rel_se), value * math.exp(Z95 * rel_se)
+
+
+def reported_widths(widths: dict, truth: dict, m, probs: dict) -> dict:
+    """The width the fit reports, as a distribution over its verdict (:func:`adhfit.fitting.assemble.reported`):
+    the true condition's interval when it is selected, the other's when that is, and otherwise the hull of
+    both (the two optima differ, so an undecided verdict widens the interval).
+
+    Returns, per parameter, ``decided``, ``undecided`` (the hull), ``mean`` (over the verdict's
+    probabilities: the expected width) and ``median`` widths (SI).
+    """
+    p_true, p_wrong = probs["decided"], probs["wrong"]
+    p_und = max(1.0 - p_true - p_wrong, 0.0)
+    out = {}
+    for name, w in widths.items():
+        own = w["width"]
+        if m.widths is None or not math.isfinite(own):
+            out[name] = {"decided": own, "undecided": own, "mean": own, "median": own}
+            continue
+        other = m.widths[name]["width"]
+        lo_t, hi_t = _interval(truth[name], w["relative_se"])
+        lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"])
+        hull = max(hi_t, hi_w) - min(lo_t, lo_w)
+        points = sorted([(own, p_true), (other, p_wrong), (hull, p_und)])
+        cum, median = 0.0, points[-1][0]
+        for value, p in points:
+            cum += p
+            if cum >= 0.5:
+                median = value
+                break
+        out[name] = {"decided": own, "undecided": hull, "mean": p_true * own + p_wrong * other + p_und * hull,
+                     "median": median}
+    return out
+
+
 def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict:
     truth = noiseless_test(protocol, slip, w, mu, x_max)
     chosen = membrane
@@ -57,11 +93,12 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict
     widths = log_widths(J, truth.values)
     m = misfit(truth, OTHER[slip], r, J)
     probs = verdict_probabilities(m)
+    reported = reported_widths(widths, truth.values, m, probs)
     try:
         info = reduced_information(J).tolist()
     except np.linalg.LinAlgError:
         info = None
-    return {"widths": widths, "verdict": probs, "membrane": chosen, "sigma": truth.sigma, "information": info,
+    return {"widths": widths, "reported": reported, "verdict": probs, "membrane": chosen, "sigma": truth.sigma, "information": info,
             "misfit": m.to_dict(),
             "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(r.size),
             "other_optimum": m.values}
@@ -97,14 +134,17 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
     entry["in_domain"] = True
     entry["settings"]["control_max"] = x_max
     for name in ("work_of_adhesion", "mu_h"):  # the worse of the true conditions: what the lab can count on
-        entry["ci95_width"][name] = max(p["widths"][name]["width"] for p in per.values())
+        entry["ci95_width"][name] = max(p["reported"][name]["mean"] for p in per.values())
     for s, p in per.items():
         entry["p_slip_decided"][s] = p["verdict"]["decided"]
         entry["p_wrong_slip"][s] = p["verdict"]["wrong"]
     membranes = {p["membrane"] for p in per.values()}
     entry["membrane"] = "exact" if "exact" in membranes else membranes.pop()
     entry["sigma_force"] = max(p["sigma"] for p in per.values())
-    entry["by_slip"] = {s: {"ci95_width": {k: v["width"] for k, v in p["widths"].items()},
+    entry["by_slip"] = {s: {"ci95_width": {k: v["mean"] for k, v in p["reported"].items()},
+                            "ci95_width_median": {k: v["median"] for k, v in p["reported"].items()},
+                            "ci95_width_decided": {k: v["decided"] for k, v in p["reported"].items()},
+                            "ci95_width_undecided": {k: v["undecided"] for k, v in p["reported"].items()},
                             "relative_se": {k: v["relative_se"] for k, v in p["widths"].items()},
                             "evidence": p["verdict"]["words"], "delta_bic_median": p["verdict"]["delta_bic"],
                             "delta_bic_90": p["verdict"]["delta_bic_range"], "misfit_chi2": p["verdict"]["misfit"],

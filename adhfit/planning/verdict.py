@@ -29,7 +29,7 @@ import numpy as np
 from ..fitting.lsq import COARSE_TOL, minimise, residual_function
 from ..fitting.selection import DECISIVE, POSITIVE, STRONG
 from ..fitting.starts import Start
-from .information import jacobian
+from .information import jacobian, log_widths
 
 __all__ = ["misfit", "Misfit", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
            "WORDS"]
@@ -59,7 +59,12 @@ class Misfit:
         The true condition's χ² on the noiseless curve (the pull-off term's constant).
     values : dict
         The other condition's optimum (SI).
+    widths : dict or None
+        The other condition's expected interval widths (:func:`~.information.log_widths`), None when its
+        optimum sits at the model's edge.
     """
+
+    widths = None
 
     def __init__(self, lam, linear_var, quadratic_var, n, k, chisqr_true, values=None) -> None:
         self.lam, self.linear_var, self.quadratic_var = float(lam), float(linear_var), float(quadratic_var)
@@ -90,11 +95,17 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
     k = J_true.shape[1]
     try:
         r_w, J_w, _ = jacobian(model, par, sigma, values)
+        # the other condition's own interval, its σ estimate inflated by the misfit (what the hull of an
+        # undecided verdict takes in, :func:`adhfit.fitting.assemble.reported`)
+        inflate = math.sqrt(1.0 + lam / max(r_true.size - k, 1))
+        other_widths = log_widths(J_w / inflate, values)
         lin = 4.0 * float(np.sum((r_w - r_true) ** 2))
         quad = 2.0 * max(2 * k - 2 * _hat_overlap(J_true, J_w), 0.0)
     except ValueError:  # the other condition's optimum sits at the model's edge: the linear term only
-        lin, quad = 4.0 * lam, 0.0
-    return Misfit(lam, lin, quad, r_true.size, k, chi_t, values)
+        lin, quad, other_widths = 4.0 * lam, 0.0, None
+    out = Misfit(lam, lin, quad, r_true.size, k, chi_t, values)
+    out.widths = other_widths
+    return out
 
 
 def sample_delta_bic(m: Misfit, rng: np.random.Generator, draws: int = DRAWS) -> np.ndarray:
