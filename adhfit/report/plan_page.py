@@ -184,7 +184,8 @@ def plan_html(plan: dict) -> str:
     verdict = (f"<p class='ok'><b>Recommended: protocol {rec}</b> — {html.escape(plan['why'])}. Its scene: scene.toml.</p>"
                if rec is not None else f"<p class='no'><b>No recommendation</b> — {html.escape(plan['why'])}.</p>")
     method = ("<p class='note'>Widths: the Fisher information of the fit's own residual at the noiseless truth, "
-              "nuisances (offsets, load-cell zero and its drift) included. P(slip decided): the probability that the "
+              "nuisances (offsets, load-cell zero and its drift) included, averaged over the fit's verdict (undecided, "
+              "it reports the hull of both slip conditions' intervals). P(slip decided): the probability that the "
               "fit's ΔBIC exceeds 10 for the true slip (the other slip's misfit to the noiseless curve, spread by the "
               "noise). Hatched: outside the model's domain. See docs/planning.md.</p>")
     style = ("body{font-family:sans-serif;max-width:1200px;margin:1em auto;color:#222}table{border-collapse:collapse;"
