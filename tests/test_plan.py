@@ -159,3 +159,14 @@ def test_global_picks_a_set_and_says_why(tmp_path, capsys):
     assert set(series["ci95_width"]) == {"work_of_adhesion", "mu_h"} and "contact radius" in series["why"]
     assert _run(tmp_path, "--noise", "5%", "--delta-max", "0.15 mm", "--global", "2") == 2
     assert "'--global'" in capsys.readouterr().err
+
+
+def test_contact_radius_end_is_programmed_as_a_pressure(tmp_path, capsys):
+    """--a-max (a bare number: the dimensionless group, as in simulate) becomes the pressure the machine is
+    programmed to; scene.toml carries that pressure."""
+    assert main(["plan", "--scene", str(PRES), "--work-of-adhesion", "0.3", "--mu-h", "1.5", "--noise", "2%",
+                 "--a-max", "0.5", "--slip", "no-slip", "-o", str(tmp_path / "p")]) == 0, capsys.readouterr().err
+    e = json.loads((tmp_path / "p" / "plan.json").read_text())["protocols"][0]
+    assert e["settings"]["a_max"] == 0.5 and e["settings"]["control_max"] > 0
+    scene = load_scene(tmp_path / "p" / "scene.toml")
+    assert scene.pressure_max == pytest.approx(e["settings"]["control_max"], rel=1e-8)

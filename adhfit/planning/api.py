@@ -99,6 +99,7 @@ def _end(scene, ends: dict, mu: float) -> tuple[str, float, str]:
         raise InputError("--a-max", None, "a loading end: --a-max A, --delta-max X or --pressure-max Q",
                          "Or set [test] contact_radius_max, displacement_max or pressure_max in the scene.")
     (key, value), = given.items()
+    value = _plain(value)  # a bare number is the dimensionless group, as in simulate
     name = _END_KEYS[key]
     if name == "displacement_max" and scene.control != "displacement" or \
             name == "pressure_max" and scene.control != "pressure":

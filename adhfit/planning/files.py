@@ -28,9 +28,11 @@ def scene_toml(protocol, entry: dict, inputs: dict) -> str:
     sc = protocol.scene
     s = entry["settings"]
     rs = "inf" if math.isinf(sc.substrate_radius) else f"{sc.substrate_radius:.9g} m"
-    end = {"a_max": ("contact_radius_max", f"{protocol.end_value * sc.membrane_radius:.9g} m"),
-           "displacement_max": ("displacement_max", f"{protocol.end_value:.9g} m"),
-           "pressure_max": ("pressure_max", f"{protocol.end_value:.9g} Pa")}[protocol.end]
+    # the control value the machine is programmed to (a contact-radius end converted, as the plan did)
+    x_max = s.get("control_max", protocol.end_value)
+    end = ("displacement_max", f"{x_max:.9g} m") if sc.control == "displacement" else ("pressure_max", f"{x_max:.9g} Pa")
+    note = (f"  # contact radius {protocol.end_value:g} b = {protocol.end_value * sc.membrane_radius:.4g} m "
+            f"({inputs['slips'][0]})" if protocol.end == "a_max" else "")
     fixed = (f'pressure = "{sc.pressure:.9g} Pa"          # the fixed pressure' if sc.control == "displacement"
              else f'gap = "{sc.gap:.9g} m"               # the fixed gap')
     w = entry["ci95_width"]["work_of_adhesion"]
@@ -43,7 +45,7 @@ def scene_toml(protocol, entry: dict, inputs: dict) -> str:
         "[membrane]", f'radius = "{sc.membrane_radius:.9g} m"', f"prestretch = {sc.prestretch:.9g}",
         f'model = "{sc.membrane_model}"', "",
         "[substrate]", f'radius = "{rs}"', "",
-        "[test]", f'control = "{sc.control}"', fixed, f'{end[0]} = "{end[1]}"', "",
+        "[test]", f'control = "{sc.control}"', fixed, f'{end[0]} = "{end[1]}"{note}', "",
         "[interface]", 'slip = "auto"', ""])
 
 
