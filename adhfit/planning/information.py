@@ -32,7 +32,7 @@ from ..fitting.objective import Values
 from ..fitting.starts import Start
 
 __all__ = ["internal", "residual_at", "jacobian", "radius_jacobian", "log_widths", "reduced_information", "widths_from_information",
-           "pull_off_curvature", "Z95", "STEP"]
+           "pull_off_curvature", "pull_off_slopes", "Z95", "STEP"]
 
 #: two-sided 95 % normal quantile
 Z95 = 1.959963984540054
@@ -70,13 +70,29 @@ def pull_off_curvature(gap: tuple[float, float, float]) -> float:
     return Z95 ** 2 / t_star ** 2
 
 
+def pull_off_slopes(gap: tuple[float, float, float], n: int = 21) -> np.ndarray:
+    """|d√(−2 ln P)/dt| at ``n`` turning points evenly across the gap (t in units of the soft edge s): the
+    pull-off row the fit's covariance sees, which depends on where in the gap its optimum falls."""
+    lo, hi = sorted(gap[:2])
+    s = gap[2]
+    h = 1e-4 * s
+    return np.array([abs(pull_off_term(gap, x + h) - pull_off_term(gap, x - h)) / (2 * h / s)
+                     for x in np.linspace(lo, hi, n)])
+
+
 def _turning_point(model, par, names: list[str], theta: np.ndarray) -> float:
     si = par.si(Values(zip(names, map(float, theta))))
     return model.turning_point(si["work_of_adhesion"], si["mu_h"], si["x_offset"])[0]
 
 
-def jacobian(model, par, sigma: float, values: dict) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def jacobian(model, par, sigma: float, values: dict, *, raw_pull_off: bool = False
+             ) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """(residual, Jacobian, internal names) of the fit's residual at SI ``values`` (central differences).
+
+    The pull-off row is the quadratic of the profile's 3.84 rise (module docstring); with ``raw_pull_off`` it is
+    (∂x_tp/∂θ)/s, to be scaled by the residual's own slope where the turning point falls
+    (:func:`pull_off_slopes`): what the fit's covariance sees (it reports a covariance interval for the slip
+    condition it does not favour).
 
     Raises
     ------
@@ -99,7 +115,7 @@ def jacobian(model, par, sigma: float, values: dict) -> tuple[np.ndarray, np.nda
     J = np.column_stack(cols)
     gap = model.jump
     if gap is not None:  # the pull-off row: the quadratic of the profile's 3.84 rise (module docstring)
-        k = pull_off_curvature(gap)
+        k = 1.0 if raw_pull_off else pull_off_curvature(gap)
         g = []
         for i in range(theta.size):
             up, down = theta.copy(), theta.copy()

@@ -29,7 +29,7 @@ import numpy as np
 from ..fitting.lsq import COARSE_TOL, minimise, residual_function
 from ..fitting.selection import DECISIVE, POSITIVE, STRONG
 from ..fitting.starts import Start
-from .information import jacobian, log_widths
+from .information import jacobian, log_widths, pull_off_slopes
 
 __all__ = ["misfit", "Misfit", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
            "WORDS"]
@@ -83,6 +83,26 @@ def _hat_overlap(J1: np.ndarray, J2: np.ndarray) -> float:
     return float(np.sum((q1.T @ q2) ** 2))
 
 
+def _covariance_widths(model, par, sigma: float, values: dict, inflate: float) -> dict:
+    """The other condition's covariance interval widths: the median over where its turning point falls in the
+    pull-off gap (the pull-off row's slope goes from ~0 in the middle to its largest at the edges, and the
+    W_ad interval with it)."""
+    J = jacobian(model, par, sigma, values, raw_pull_off=True)[1] / inflate
+    gap = model.jump
+    if gap is None:
+        return log_widths(J, values)
+    runs = []
+    for slope in pull_off_slopes(gap):
+        Jt = J.copy()
+        Jt[-1] *= slope
+        runs.append(log_widths(Jt, values))
+    out = {}
+    for name in ("work_of_adhesion", "mu_h"):
+        k = int(np.argsort([r[name]["width"] for r in runs])[len(runs) // 2])
+        out[name] = runs[k][name]
+    return out
+
+
 def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Misfit:
     """Fit ``other_slip`` to the noiseless curve of ``truth`` (:class:`~.truth.Truth`) by the fit's least squares."""
     model = truth.model_of(other_slip)
@@ -95,10 +115,11 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
     k = J_true.shape[1]
     try:
         r_w, J_w, _ = jacobian(model, par, sigma, values)
-        # the other condition's own interval, its σ estimate inflated by the misfit (what the hull of an
-        # undecided verdict takes in, :func:`adhfit.fitting.assemble.reported`)
+        # the other condition's own interval as the fit reports it for the condition it does not favour (from
+        # the covariance: the pull-off row's own derivative), its σ estimate inflated by the misfit; the hull of
+        # an undecided verdict takes it in (:func:`adhfit.fitting.assemble.reported`)
         inflate = math.sqrt(1.0 + lam / max(r_true.size - k, 1))
-        other_widths = log_widths(J_w / inflate, values)
+        other_widths = _covariance_widths(model, par, sigma, values, inflate)
         lin = 4.0 * float(np.sum((r_w - r_true) ** 2))
         quad = 2.0 * max(2 * k - 2 * _hat_overlap(J_true, J_w), 0.0)
     except ValueError:  # the other condition's optimum sits at the model's edge: the linear term only
