@@ -66,7 +66,8 @@ class Misfit:
 
     widths = None
 
-    def __init__(self, lam, linear_var, quadratic_var, n, k, chisqr_true, values=None) -> None:
+    def __init__(self, lam: float, linear_var: float, quadratic_var: float, n: int, k: int, chisqr_true: float,
+                 values: dict | None = None) -> None:
         self.lam, self.linear_var, self.quadratic_var = float(lam), float(linear_var), float(quadratic_var)
         self.n, self.k, self.chisqr_true, self.values = int(n), int(k), float(chisqr_true), dict(values or {})
 
