@@ -2,7 +2,7 @@
 
 For each protocol (both control modes, both true slips, slips decided and undecided), the plan predicts
 the expected 95 % interval widths of W_ad and μh and P(slip decided); then ``--replicates`` noisy curves
-are made as ``adhfit simulate --scene ... -o`` makes them (:func:`adhfit.fitting.synthetic.measured_frame`,
+are made as ``adhfit simulate --scene ... -o`` makes them (:func:`adhfit.synthetic.measured_frame`,
 written to CSV) and fitted as ``adhfit fit`` fits them (:func:`adhfit.fit` on the CSV file, default
 settings: least squares, slip auto, profiles).  Compared: the predicted widths with the median reported
 widths — per verdict class, since an undecided fit reports the hull of both slip conditions' intervals
@@ -69,7 +69,7 @@ def predict(proto) -> dict:
 def replicate(job) -> dict:
     """One simulated curve (as ``adhfit simulate --scene -o`` writes it) fitted as ``adhfit fit`` fits it."""
     import adhfit
-    from adhfit.fitting.synthetic import measured_frame
+    from adhfit.synthetic import measured_frame
     proto, x_max, seed = job
     name, scene_name, end, value, slip, noise = proto
     scene = _scene(scene_name)

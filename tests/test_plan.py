@@ -10,7 +10,7 @@ import pytest
 
 import adhfit
 from adhfit.cli.main import main
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.planning.evaluate import predict
 from adhfit.planning.protocols import Protocol
 from adhfit.scene import load_scene
@@ -51,7 +51,7 @@ def test_misfit_is_the_fits_own_delta_bic_on_the_noiseless_curve():
 
 
 def test_an_undecided_slip_widens_the_reported_interval():
-    """Undecided, the fit reports the hull of both conditions' intervals (adhfit.fitting.assemble.reported): the
+    """Undecided, the fit reports the hull of both conditions' intervals (adhfit.fitting.stage.reported): the
     expected width mixes the decided width and the hull with the verdict's probabilities (the benchmark checks
     the hull against undecided replicate fits: docs/planning.md)."""
     sc = load_scene(DISP)
@@ -132,7 +132,7 @@ def test_filmed_contact_radius_widths_match_the_fits_own_interval():
     the noiseless curve and radius with both σ given agrees to 5 % (measured: 1e-4), and the radius narrows
     the W_ad interval (here about 3x)."""
     import dataclasses
-    from adhfit.fitting.synthetic import true_contact_radius
+    from adhfit.synthetic import true_contact_radius
     sc = load_scene(DISP)
     proto = Protocol(sc, "displacement_max", 2e-4, 300, 0.03)
     e = predict(proto, ("no-slip",), W, MU, "large-stretch", radius_noise=0.01)

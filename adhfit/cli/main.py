@@ -180,7 +180,7 @@ def _scene_kwargs(args):
     for name in ("control", "p", "d", "w", "rs", "lambda0"):
         if getattr(args, name) is not None:
             raise _Usage(f"adhfit simulate: --{name} cannot be combined with --scene (the scene sets it)")
-    from ..fitting.synthetic import parse_end  # noqa: PLC0415
+    from ..synthetic import parse_end  # noqa: PLC0415
     scene = load_scene(args.scene)
     kwargs = scene.to_dimensionless(args.mu_h, args.work_of_adhesion, slip=args.slip)
     scales = scene.scales(args.mu_h)
@@ -198,7 +198,7 @@ def _scene_kwargs(args):
 
 def _write_measured(args, scene, result) -> None:
     """The measured-style CSV of a scene run (what a testing machine records; 'adhfit fit' reads it)."""
-    from ..fitting.synthetic import loading_end_si, measured_frame  # noqa: PLC0415
+    from ..synthetic import loading_end_si, measured_frame  # noqa: PLC0415
     scales = scene.scales(args.mu_h)
     kw = result.inputs
     x_max = loading_end_si(result.frame, scene.control, scales)

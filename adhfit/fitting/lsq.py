@@ -360,9 +360,15 @@ def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start
         if d is not None else []
     if not ok and not detected:
         return raw
+    # every candidate split coarsely (a split in another basin shows it long before full convergence), the
+    # least χ² then to full precision; all start where the free split ended and share its histories
     fits = [_fixed_fit(raw, k, sigma, sigma_est, base, si, "row split of the free-split optimum") for k in ok]
     fits += [_fixed_fit(raw, k, sigma, sigma_est, base, si, "row split at the detected jump") for k in detected]
     best = min(fits, key=lambda f: f.best.chisqr)
+    refined = minimise(residual_function(best.model, par, raw.scale, sigma_est), best.best.params,
+                       scale_covar=sigma is None, tol=FINE_TOL)
+    if refined.chisqr <= best.best.chisqr:
+        fits[fits.index(best)] = best = dataclasses.replace(best, best=refined)
     if not ok and best.best.chisqr >= raw.best.chisqr:  # the free fit (no pull-off in the data) stands
         return raw
     near = [f for f in fits if f is not best and abs(f.model.segments.i_jump - best.model.segments.i_jump) == 1]
@@ -375,12 +381,11 @@ def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base:
                why: str) -> RawFit:
     """The fit with the detachment fixed before row ``j`` (pull-off term included)."""
     m, par, f = raw.model, raw.par, raw.model.force
-    seg = m.segments.split_before(j, f)
-    fixed = CurveModel(m.curve, m.scene, m.slip, points=m.points, segments=seg, fixed_split=True,
-                       membrane=m.membrane)
-    fixed.n_histories, fixed.n_evaluations = m.n_histories, m.n_evaluations  # the cost of stage 1 too
+    fixed = m.split_before(j)  # its histories shared; the cost of stage 1 counted too
     residual = residual_function(fixed, par, raw.scale, sigma_est)
     label = f"{raw.won}; {why} (before row {j})"
-    best, starts, won = _run_starts(residual, par, [Start(base, **si)], scale_covar=sigma is None, labels=[label])
-    return RawFit(slip=m.slip, best=best, model=fixed, par=par, scale=raw.scale,
-                  sigma_given=raw.sigma_given, starts=raw.starts + starts, won=won)
+    start = Start(base, **si)
+    res = minimise(residual, par.params(start), scale_covar=sigma is None, tol=COARSE_TOL)
+    starts = [{**{k: float(v) for k, v in start.items()}, "chisqr": float(res.chisqr), "start": label}]
+    return RawFit(slip=m.slip, best=res, model=fixed, par=par, scale=raw.scale,
+                  sigma_given=raw.sigma_given, starts=raw.starts + starts, won=label)

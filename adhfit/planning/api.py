@@ -86,7 +86,7 @@ def parse_noise(value: Any, flag: str = "--noise") -> float:
 
 
 def _end(scene, ends: dict, mu: float) -> tuple[str, float, str]:
-    from ..fitting.synthetic import parse_end  # noqa: PLC0415
+    from ..synthetic import parse_end  # noqa: PLC0415
     given = {k: v for k, v in ends.items() if v is not None}
     if len(given) > 1:
         raise InputError("--" + list(given)[1].replace("_", "-"), list(given.values())[1],

@@ -46,7 +46,7 @@ def _interval(value: float, rel_se: float) -> tuple[float, float]:
 
 
 def reported_widths(widths: dict, truth: dict, m, probs: dict) -> dict:
-    """The width the fit reports, as a distribution over its verdict (:func:`adhfit.fitting.assemble.reported`):
+    """The width the fit reports, as a distribution over its verdict (:func:`adhfit.fitting.stage.reported`):
     the true condition's interval when it is selected, the other's when that is, and otherwise the hull of
     both (the two optima differ, so an undecided verdict widens the interval).
 

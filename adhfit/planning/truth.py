@@ -1,7 +1,7 @@
 """The noiseless test of a protocol: the curve the fit would see without noise, its noise level, and
 whether the protocol stays inside the model's domain.
 
-The rows are laid out as :func:`adhfit.fitting.synthetic_curve` lays a measured-style curve (the
+The rows are laid out as :func:`adhfit.synthetic.synthetic_curve` lays a measured-style curve (the
 control variable rises at a constant step from before contact to the loading end and falls at the
 same step past pull-off; ``rows`` in all), so the plan predicts the fit of exactly the curves
 ``adhfit simulate --scene ... -o`` writes.  The fit's model is then built as the fit builds it
@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import AdhfitError, ConvergenceError, InputError
 from ..fitting.lsq import Parametrisation, drift_supported
 from ..fitting.model import CurveModel, ModelDomainError, segment
-from ..fitting.synthetic import loading_end_si, synthetic_curve
+from ..synthetic import loading_end_si, synthetic_curve
 from ..params import A_MAX_OVER_RS
 from ..simulation import simulate
 from .protocols import Protocol

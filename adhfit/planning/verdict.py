@@ -118,7 +118,7 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
         r_w, J_w, _ = jacobian(model, par, sigma, values)
         # the other condition's own interval as the fit reports it for the condition it does not favour (from
         # the covariance: the pull-off row's own derivative), its σ estimate inflated by the misfit; the hull of
-        # an undecided verdict takes it in (:func:`adhfit.fitting.assemble.reported`)
+        # an undecided verdict takes it in (:func:`adhfit.fitting.stage.reported`)
         inflate = math.sqrt(1.0 + lam / max(r_true.size - k, 1))
         other_widths = _covariance_widths(model, par, sigma, values, inflate)
         lin = 4.0 * float(np.sum((r_w - r_true) ** 2))
