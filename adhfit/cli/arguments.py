@@ -150,7 +150,7 @@ def add_plan_arguments(subparsers) -> argparse.ArgumentParser:
     """Add the ``plan`` sub-command (docs/contracts.md A8) to an argparse sub-parser collection; returns its parser."""
     p = subparsers.add_parser(
         "plan", help="plan a test: which protocol decides W_ad, mu*h and the slip (before running it)",
-        description="Predict, for candidate protocols, the 95 %% interval widths of W_ad and mu*h that a fit "
+        description="Predict, for candidate protocols, the 95 % interval widths of W_ad and mu*h that a fit "
                     "will report and the probability that it decides the slip condition; recommend the cheapest "
                     "protocol that decides the slip (P >= 0.9) and reaches --target-precision (docs/planning.md). "
                     "Writes DIR/plan.json, DIR/report.html and DIR/scene.toml (the recommended protocol).")
