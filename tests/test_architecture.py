@@ -2,7 +2,7 @@
 
 Layers, top to bottom (a module may import its own layer and the layers below it):
 
-    cli -> report -> fitting -> scene/data -> loading/units/params -> core -> errors
+    cli -> report/planning -> fitting -> scene/data -> loading/units/params -> core -> errors
 
 The import graph is read from the source (``ast``), module-level and function-level imports alike, so
 an import hidden in a function to dodge a cycle still counts.
@@ -17,7 +17,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "adhfit"
 
 #: (prefix, layer): the first matching prefix decides (longest prefixes first)
-LAYERS = [("adhfit.cli", 7), ("adhfit.report", 6), ("adhfit.fitting", 5),
+LAYERS = [("adhfit.cli", 7), ("adhfit.report", 6), ("adhfit.planning", 6), ("adhfit.fitting", 5),
           ("adhfit.scene", 4), ("adhfit.data", 4), ("adhfit.synthetic", 4), ("adhfit.readers", 4), ("adhfit.physical", 4),
           ("adhfit.loading", 3), ("adhfit.simulation", 3), ("adhfit.membranes", 3), ("adhfit.histories", 2), ("adhfit.units", 3), ("adhfit.params", 3),
           ("adhfit.core", 2), ("adhfit.exact", 2),

@@ -134,6 +134,9 @@ def _fit_parser(sub) -> None:
     from .fit import run_fit  # noqa: PLC0415
     from .interrupt import interruptible  # noqa: PLC0415 - Ctrl-C: one line, status 130, no process left
     add_fit_arguments(sub).set_defaults(run=interruptible(run_fit))
+    from .arguments import add_plan_arguments  # noqa: PLC0415
+    from .plan import run_plan  # noqa: PLC0415 - the planning package loads only when a plan runs
+    add_plan_arguments(sub).set_defaults(run=interruptible(run_plan))
 
 
 def _run_simulate(args) -> int:
