@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .branches import is_implicit, observe
+from .branches import admissible, is_implicit, observe
 from .jit import jit
 from .solve import solve_one
 
@@ -122,7 +122,8 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
         x, k, st = solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix)
         good = st == 0
         if good:
-            good = observe(code, x, k, loc, c, w, a_m, obs) and math.isfinite(obs[4])
+            # every observable finite: at the Case I limit J0 can be finite where the gap is not
+            good = admissible(observe(code, x, k, loc, c, w, a_m, obs), obs)
         if not good:
             h *= 0.5
             if h < 1e-10 * span:

@@ -29,7 +29,8 @@ H_END_UNREACHABLE = 1  # loading end beyond the largest radius: err[0] = gap res
 H_END_SOLVE = 2        # the radius of the loading end did not converge: err[0] = solver status
 H_MC_PRESSURE = 3      # making contact, no pressure for the gap: err[0] = row, err[1] = a
 H_MC_STATE = 4         # making contact outside the model: err[0] = row (last = end of loading), err[1] = a
-H_FOLLOW = 5           # continuation failed: err = stage (1 pin, 2 del), follow status, locator, kappa
+H_FOLLOW = 5           # continuation failed: err = stage (1 pin, 2 del), follow status, locator, kappa, x
+#                        (the last accepted state: locator, kappa and unknown x, NaN if explicit)
 H_STATE = 6            # a row outside the model: err = stage, row, locator
 H_EXTREMUM = 7         # an extremum search failed: err = stage, which (0 turning point, 1 f_min), locator, status
 
@@ -84,9 +85,10 @@ def _follow_rows(stage, code, pressure, l0, locs, x0, k0, c, w, a_m, L_m, d_fix,
                  max_steps(locs.size), allow_end)
     st, n_out = res[0], res[1]
     if st != F_OK or (n_out != locs.size and not allow_end):
-        path_l, path_k = res[4], res[6]
+        path_l, path_x, path_k = res[4], res[5], res[6]
         err[0], err[1] = stage, st
         err[2], err[3] = path_l[path_l.size - 1], path_k[path_k.size - 1]
+        err[4] = path_x[path_x.size - 1]
         return res, H_FOLLOW
     for i in range(n_out):  # every step follow accepts is admissible with a finite force
         if not admissible(True, res[8][:, i]):
@@ -187,7 +189,7 @@ def run(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, end_kappa, end_ta
 
     Returns
     -------
-    status, err : int, ndarray (4,)
+    status, err : int, ndarray (5,)
         ``H_OK`` or the failure (see the ``H_*`` codes) and its state.
     a_max : float
     cols : ndarray (7, n)
@@ -202,7 +204,7 @@ def run(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, end_kappa, end_ta
         Force at the end of loading; radius where the no-slip delamination branch ends (NaN when it
         reaches detachment).
     """
-    err = np.full(4, math.nan)
+    err = np.full(5, math.nan)
     if not math.isfinite(a_max):
         a_max, st = _loading_end(c, end_kappa, end_target, end_lo, end_hi, err)
         if st != H_OK:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .branches import admissible, bracket, is_implicit, material_residual, material_target, observe, state
 from .jit import jit
-from .newton import (CHORD_RATE, FAIL_OUTER, JOINT_MAXITER, MAXITER, OK, STEP, damped_step,
+from .newton import (ACCEPT, CHORD_RATE, FAIL_OUTER, JOINT_MAXITER, MAXITER, OK, STEP, damped_step,
                      gap_from, inner_one, stop)
 
 __all__ = ["FD_STEP", "pressure_one", "solve_one", "solve_batch", "solve_observe_batch",
@@ -55,6 +55,22 @@ def _jacobian(code, x, kappa, loc, c, w, a_m, s0, fd):
 
 
 @jit
+def _solved(code, x, kappa, loc, c, w, a_m, L_m, d_fix, R, G):
+    """Whether a state a pressure-control solve calls converged is a root: its residuals ``R``
+    (material) and ``G`` (gap), from the iterate before the last step, within ACCEPT, or else
+    those of the state itself (one more evaluation). At the Case I limit a vanishing step is no
+    root (``newton.ACCEPT``)."""
+    if abs(R) <= ACCEPT and abs(G) <= ACCEPT:
+        return True
+    st = state(code, x, kappa, loc, c, w, a_m, True)
+    if not st[6]:
+        return False
+    tgt = material_target(code, complex(loc, 0.0), c, a_m, L_m).real if is_implicit(code) else 0.0
+    r = st[5] - tgt if is_implicit(code) else 0.0
+    return abs(r) <= ACCEPT and abs(st[2] - d_fix) <= ACCEPT
+
+
+@jit
 def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
     """Joint Newton on (material condition, gap) for one row: (x, kappa, converged).
 
@@ -88,7 +104,8 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
             x, kappa = x + dx, kappa + dk
         if exact or stop(fresh and not fd, size, prev):
             lo, hi = bracket(code, loc, c, w, a_m)
-            return x, kappa, min(lo, hi) <= x <= max(lo, hi)
+            return x, kappa, (min(lo, hi) <= x <= max(lo, hi)
+                              and _solved(code, x, kappa, loc, c, w, a_m, L_m, d_fix, R, G))
         fresh = not (size <= CHORD_RATE * prev)
         prev = size
     return math.nan, math.nan, False
@@ -136,9 +153,10 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
             break
     if not converged:
         return math.nan, kappa, FAIL_OUTER
-    if not implicit:
-        return 0.0, kappa, OK
-    x, st = inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
+    x, st = (inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo) if implicit
+             else (0.0, OK))
+    if st == OK and not _solved(code, x, kappa, loc, c, w, a_m, L_m, d_fix, math.inf, math.inf):
+        return math.nan, kappa, FAIL_OUTER
     return x, kappa, st
 
 
