@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from .branches import (DEL_FR, DEL_NS, MC, PIN_FR, PIN_NS, admissible, evaluate_batch, first_bad,
-                       is_implicit, state)
-from .continuation import F_OK, SCALE_LINEAR, SCALE_LOG, SCALE_SQRT, follow, max_steps
+from .branches import (CLAMP_NEAR, DEL_FR, DEL_NS, MC, PIN_FR, PIN_NS, admissible, clamp_margin,
+                       evaluate_batch, first_bad, is_implicit, state)
+from .continuation import F_OK, F_STALLED, SCALE_LINEAR, SCALE_LOG, SCALE_SQRT, follow, max_steps
 from .jit import jit
 from .newton import OK, R_MC_RADIUS, bracketed, mc_pressure_rows
 from .rows import S_ONSET, assemble, extrema
@@ -142,6 +142,11 @@ def _delamination(pressure, no_slip, kappa_dc, c, w, a_m, L_m, d_fix, onset, on_
     if st != H_OK or res[1] == a_dl.size:
         return a_dl, res[2], res[8], math.nan, st
     branch_end = res[4][res[4].size - 1]
+    x_e, k_e = res[5][res[5].size - 1], res[6][res[6].size - 1]
+    if clamp_margin(code, x_e, k_e, branch_end, c, w, a_m) <= CLAMP_NEAR:
+        # not the branch's own end (alpha -> 0): it leaves the model at the Case I limit
+        err[0], err[1], err[2], err[3], err[4] = 2, F_STALLED, branch_end, k_e, x_e
+        return a_dl, res[2], res[8], math.nan, H_FOLLOW
     a_dl = branch_end + (a_on - branch_end) * u_dl
     xs, out, st = _to_branch_end(code, pressure, a_on, x_on, k_on, a_dl, (res[4], res[5], res[6]),
                                  kappa_dc, c, w, a_m, L_m, d_fix, err)
