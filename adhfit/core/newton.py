@@ -221,7 +221,21 @@ def mc_bracketed(a, c, d_fix, l, h):
 
     Returns (kappa, status): ``OK``, ``FAIL_BRACKET`` or ``FAIL_INNER``.
     """
-    k, st, _, _ = bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (l + h), l, h)
+    k, st, rl, rh = bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (l + h), l, h)
+    if st == FAIL_BRACKET and not math.isfinite(rl) and math.isfinite(rh) and rh > 0:
+        # near p_cr a contact of radius a can be outside the model (on small, strongly curved
+        # substrates): bisect for a pressure in the model with the gap below d_fix, the low end
+        lo, hi = l, h
+        for _ in range(80):
+            m = 0.5 * (lo + hi)
+            r = mc_gap(complex(m, 0.0), a, c, d_fix).real
+            if not math.isfinite(r):
+                lo = m
+            elif r > 0:
+                hi = m
+            else:
+                k, st, _, _ = bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (m + h), m, h)
+                return k, st
     return k, st
 
 
@@ -262,4 +276,9 @@ def mc_pressure_rows(a, c, d_fix, lo, hi):
             ks[i], status[i] = _mc_from(a[i], c, d_fix, lo[i], hi[i], k0)
         else:
             ks[i], status[i] = mc_bracketed(a[i], c, d_fix, lo[i], hi[i])
+        if status[i] != OK and i > 0 and status[i - 1] == OK and ks[i - 1] > lo[i]:
+            # at p_cr a contact of radius a[i] can be outside the model (no residual at the
+            # bracket's low end, on coarse grids whose predictor fails); the row before's pressure
+            # is a low end with a residual (its gap at a larger radius falls below d_fix)
+            ks[i], status[i] = mc_bracketed(a[i], c, d_fix, ks[i - 1], hi[i])
     return ks, status
