@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 import adhfit
@@ -93,3 +94,39 @@ def test_exact_f_min_is_the_least_force_of_the_history():
         pytest.skip("no exact history here")
     f = r.frame
     assert r.summary["f_min"]["f"] <= f.f[f.stage != "making_contact"].min() + 1e-12
+
+
+# --------------------------------------------------------------------------------------------------
+# making contact past the exact membrane's Case I limit (stress run, seed 24: 82 of 1000 exact scenes
+# were "the free membrane turns past vertical at the clamp ... did not converge")
+
+PAST_VERTICAL = dict(control="pressure", slip="frictionless", d=0.64296375436047, w=0.0693702693121474,
+                     rs=math.inf, a_max=0.677602256799158, lambda0=1.926539)
+
+
+def test_making_contact_past_the_case_one_limit_names_the_largest_a_max():
+    from adhfit.errors import InputError
+    with pytest.raises(InputError) as info:
+        adhfit.simulate(**PAST_VERTICAL, points=60, membrane="exact")
+    text = str(info.value)
+    assert info.value.name == "a_max" and "Case I exact membrane" in text
+    bound = float(text.split("[0.001, ")[1].split("]")[0])
+    # second method: the exact engine's own making-contact states either side of the bound, each solved
+    # on its own from the free inflation: Case I just below, past vertical at the clamp just above
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import march
+    from adhfit.exact.stages import PastVertical, making_contact
+    from adhfit.exact.state import Config
+    kw = {k: PAST_VERTICAL[k] for k in ("control", "slip", "d", "w", "rs", "lambda0")}
+    c = prepare(kw["control"], kw["slip"], None, kw["d"], kw["w"], kw["rs"], kw["lambda0"], 0.5 * bound,
+                None, None, 60, 8)
+    stage = making_contact(Config(c.lambda0, c.crv, c.n), c.control, c.p, c.d)
+    x0 = [c.free.lc, 1e-3 / c.free.lc, c.free.p]
+    grid = bound * (1 - 1e-4) * (0.05 + 0.95 * (1 - (1 - np.linspace(0, 1, 40)) ** 2))  # dense at the end
+    below = march(stage, list(grid), x0)
+    assert below[-1].theta_end < 0.5 * math.pi
+    with pytest.raises(PastVertical):
+        stage.solve(bound * (1 + 1e-4), stage.x(below[-1]))
+    # and a history runs just inside it
+    r = adhfit.simulate(**{**PAST_VERTICAL, "a_max": 0.999 * bound}, points=60, membrane="exact")
+    assert r.inputs["a_max"] == pytest.approx(0.999 * bound)

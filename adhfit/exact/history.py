@@ -10,7 +10,7 @@ from ..errors import ConvergenceError, DomainError, InputError
 from ..histories import History
 from .control import Control, prepare
 from .march import PREDICT, vertex
-from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
+from .stages import PastVertical, Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
 __all__ = ["exact_history", "COLUMNS"]
@@ -144,8 +144,47 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         c.a_max = _loading_end(stage, c)
     a_vals = _cluster(c.n_mc)[1:] * c.a_max
     x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
-    states = march(stage, a_vals, x0)
+    states = march(stage, a_vals, x0, stop_ok=True)
+    if len(states) < len(a_vals):
+        if states:
+            _case_one_end(stage, c, states[-1], a_vals[len(states)])
+        march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     return [free] + states, states[-1]
+
+
+def _case_one_end(stage, c, good, a_bad):
+    """Making contact stopped between the solved Case I state ``good`` and ``a_bad``: when the state
+    at ``a_bad`` solves and turns past vertical at the clamp, bisect the solved states between them
+    for the Case I limit (every state solved from ``good``; one side Case I, the other past vertical)
+    and raise the bound: an InputError for a_max under pressure control, a DomainError under
+    displacement control (as the large-stretch model words them). Returns when not shown."""
+    lo, hi = good.a, a_bad
+    try:
+        stage.solve(hi, stage.x(good))
+        return
+    except PastVertical:
+        pass
+    except ConvergenceError:
+        return
+    while hi - lo > 1e-10 * hi:
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = stage.solve(mid, stage.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return
+    if c.control == "pressure":
+        raise InputError("a_max", c.a_max, f"a number in [0.001, {lo:.6g}], the largest contact radius "
+                         f"with a Case I exact membrane at d = {c.d:g}, lambda0 = {c.lambda0:g}",
+                         "The membrane cannot reach a larger contact radius (its tangent would turn "
+                         "past vertical at the clamp): lower a_max.")
+    raise DomainError("the exact membrane would turn past vertical at the clamp while making contact "
+                      "(Case I ends)", f"a_max must stay below {lo:.6g} at p = {c.p:g}, rs = {c.rs:g}, "
+                      f"lambda0 = {c.lambda0:g} (solved states either side of it, to 1e-10)",
+                      "lower a_max, or raise p",
+                      {"control": c.control, "slip": c.slip, "p": c.p, "rs": c.rs, "lambda0": c.lambda0,
+                       "a_max": c.a_max})
 
 
 def _bracket(pin, c, m, top):
