@@ -20,6 +20,8 @@ from .newton import (ACCEPT, CHORD_RATE, FAIL_OUTER, JOINT_MAXITER, MAXITER, OK,
 __all__ = ["FD_STEP", "pressure_one", "solve_one", "solve_batch", "solve_observe_batch",
            "derivative_row"]
 
+#: outer iterations of :func:`pressure_one`'s nested solve for a caller that can shorten its step
+FALLBACK_ITER = 12
 #: relative step of the forward differences of the joint Newton's Jacobian, sqrt(machine epsilon)
 FD_STEP = 1.4901161193847656e-08
 
@@ -112,7 +114,7 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
 
 
 @jit
-def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
+def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, short=False):
     """Pressure control, one row: (x, kappa, status).
 
     An implicit row with a finite predictor x0 is first solved by :func:`_joint_one` (Jacobian by
@@ -139,7 +141,10 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
     lc = complex(loc, 0.0)
     converged = False
     xi = math.nan
-    for _ in range(MAXITER):
+    # from a continuation's predictor the joint Newton converges in a few steps where a state is
+    # near; a caller that can shorten its step (:func:`.continuation.follow`) gives the nested
+    # solve FALLBACK_ITER iterations, not MAXITER (failed steps cost up to 60 x 120 evaluations)
+    for _ in range(FALLBACK_ITER if short else MAXITER):
         if implicit:
             xi, _st = inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
             if math.isfinite(xi):
@@ -161,14 +166,15 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
 
 
 @jit
-def solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix):
-    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``.
+def solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix, short=False):
+    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``
+    (``short``: see :func:`pressure_one`).
 
     The one-row case of :func:`solve_batch`, without its arrays.
     """
     implicit = is_implicit(code)
     if pressure:
-        return pressure_one(code, loc, c, w, a_m, L_m, d_fix, k, xg, implicit)
+        return pressure_one(code, loc, c, w, a_m, L_m, d_fix, k, xg, implicit, short)
     if implicit:
         x, st = inner_one(code, k, loc, c, w, a_m, L_m, xg, True)
         return x, k, st
