@@ -21,7 +21,7 @@ F_OK, F_STALLED, F_STEPS = 0, 1, 2
 #: a gap to the goal within this relative distance is closed in one step
 GAP_CLOSE = 1e-12
 #: steps above this fraction of the span solve with the nested pressure solve cut short
-SHORT_UNTIL = 1e-4
+SHORT_UNTIL = 1e-8
 #: step variables of follow: the locator, its logarithm, its square root
 SCALE_LINEAR, SCALE_LOG, SCALE_SQRT = 0, 1, 2
 
