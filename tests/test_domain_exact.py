@@ -130,3 +130,36 @@ def test_making_contact_past_the_case_one_limit_names_the_largest_a_max():
     # and a history runs just inside it
     r = adhfit.simulate(**{**PAST_VERTICAL, "a_max": 0.999 * bound}, points=60, membrane="exact")
     assert r.inputs["a_max"] == pytest.approx(0.999 * bound)
+
+
+#: exact pinning that turns past vertical at the clamp before G reaches w (stress run, seed 24: one of
+#: the 68 "G does not reach w before the pinning branch ends ... did not converge")
+PIN_PAST_VERTICAL = dict(control="displacement", slip="frictionless", p=0.9622870083761739,
+                         w=1.5748326323546618, rs=math.inf, a_max=0.6954599904542166,
+                         lambda0=1.2667544447593715)
+
+
+def test_exact_pinning_past_the_case_one_limit_is_a_domain_error_between_solved_states():
+    with pytest.raises(DomainError) as info:
+        adhfit.simulate(**PIN_PAST_VERTICAL, points=60, membrane="exact")
+    assert "turns past vertical at the clamp" in str(info.value) and "did not converge" not in str(info.value)
+    alpha_end = info.value.inputs["locator"]
+    # second method: the engine's pinning states solved one by one along alpha up to just below the
+    # reported limit stay Case I, the clamp angle closing on pi/2; just above it they are past vertical
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, march
+    from adhfit.exact.stages import PastVertical, pinning
+    from adhfit.exact.state import Config
+    sc = PIN_PAST_VERTICAL
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 60, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    alphas = alpha_end * (1 - np.geomspace(0.5, 1e-7, 60))
+    states = march(pin, list(alphas), pin.x(m))
+    theta = [s.theta_end for s in states]
+    assert all(t < 0.5 * math.pi for t in theta) and 0.5 * math.pi - theta[-1] < 1e-3
+    assert states[-1].G < sc["w"]
+    with pytest.raises(PastVertical):
+        pin.solve(alpha_end * (1 + 1e-6), pin.x(states[-1]))

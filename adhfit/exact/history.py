@@ -195,11 +195,46 @@ def _bracket(pin, c, m, top):
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
     if st is None:
+        _pinning_case_one_end(pin, c, prev, prev_a)
         raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
                                "(the clamp turning past vertical, or the contact region going slack: "
                                "stretch -> 1, outside a membrane model)",
                                {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
     return prev, prev_a, st, alpha
+
+
+def _pinning_case_one_end(pin, c, good, alpha_good):
+    """Pinning stopped after the solved Case I state ``good`` (at ``alpha_good``) before G reached w:
+    when a state a little further solves and turns past vertical at the clamp, bisect the solved
+    states between them for the Case I limit and raise it as a DomainError. Returns when not shown."""
+    lo, hi = alpha_good, None
+    for step in (1e-8, 1e-6, 1e-4):
+        try:
+            pin.solve(alpha_good * (1.0 + step), pin.x(good))
+        except PastVertical:
+            hi = alpha_good * (1.0 + step)
+            break
+        except ConvergenceError:
+            continue  # no state from this guess: a longer step may still show the limit
+        else:
+            return  # a Case I state past the stop: not its end
+    if hi is None:
+        return
+    while hi - lo > 1e-10 * hi:
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = pin.solve(mid, pin.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return
+    raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp at alpha = "
+                      f"{lo:.8g}, G = {good.G:.6g}, before G reaches w = {c.w:g} (the onset of "
+                      "delamination; Case II beyond, outside the model)",
+                      "solved states either side of it, to 1e-10 in alpha",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": lo})
 
 
 def _onset(cfg, c, m):
