@@ -1,10 +1,11 @@
-"""Batch fitting on every core (issue 10, item 5): 8 curves serial against ``--workers N``.
+"""Batch fitting on every core (issues 10 and 21): 16 curves serial against ``--workers N``.
 
-The 8 sample curves (``sample_data/*``: both controls, both slips, curved and flat substrates) are fitted
-as one batch through the command line, in a fresh process each time, exactly as a user runs it::
+The 8 sample curves (``sample_data/*``: both controls, both slips, curved and flat substrates), copied
+into a temporary folder as many times as ``--curves`` asks (16: each twice, ``set0/`` and ``set1/``), are
+fitted as one batch through the command line, in a fresh process each time, exactly as a user runs it::
 
-    python -m adhfit.cli fit sample_data --workers 1 -o OUT      # serial
-    python -m adhfit.cli fit sample_data --workers 2 -o OUT      # two local processes
+    python -m adhfit.cli fit DATA --workers 1 -o OUT      # serial
+    python -m adhfit.cli fit DATA --workers 2 -o OUT      # two local processes
 
 with the default fit options (both slips compared, profile intervals, figures), or the options given
 after ``--``.  Runs alternate (serial, parallel, serial, ...) so that the shared machine's load hits both
@@ -13,7 +14,7 @@ pair of summaries is checked to be identical (every column but ``wall_time_s``).
 
 Usage::
 
-    python benchmarks/bench_batch.py [--repeat 3] [--workers 2] [-- FIT OPTIONS]
+    python benchmarks/bench_batch.py [--repeat 3] [--workers 2] [--curves 16] [-- FIT OPTIONS]
 
 Writes ``benchmarks/results/batch.md`` and ``benchmarks/results/batch.json``.
 """
@@ -69,9 +70,24 @@ def _cpu_tree(proc, seen: dict) -> None:
         pass
 
 
+def make_data(tmp: Path, n: int) -> Path:
+    """A folder of ``n`` curves: the sample folders (curve.csv and scene.toml) copied set after set."""
+    import shutil  # noqa: PLC0415
+    samples = sorted(p.parent for p in DATA.glob("*/curve.csv"))
+    data = tmp / "data"
+    for k in range(n):
+        src = samples[k % len(samples)]
+        dest = data / f"set{k // len(samples)}" / src.name
+        dest.mkdir(parents=True)
+        for f in ("curve.csv", "scene.toml"):
+            shutil.copy(src / f, dest / f)
+    return data
+
+
 def _run(workers: int, extra: list[str], tmp: Path, tag: str) -> tuple[float, list[dict], dict]:
     out = tmp / tag
-    cmd = [sys.executable, "-m", "adhfit.cli", "fit", str(DATA), "--workers", str(workers), "-o", str(out), *extra]
+    cmd = [sys.executable, "-m", "adhfit.cli", "fit", str(tmp / "data"), "--workers", str(workers), "-o", str(out),
+           *extra]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     seen: dict = {}
     t0 = time.perf_counter()
@@ -103,12 +119,14 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--curves", type=int, default=16)
     args = ap.parse_args(own)
-    n_curves = sum(1 for _ in DATA.glob("*/curve.csv"))
+    n_curves = args.curves
     load0 = os.getloadavg()
     times: dict[str, list[float]] = {"serial": [], "parallel": []}
     cpu: dict[str, list[dict]] = {"serial": [], "parallel": []}
     with tempfile.TemporaryDirectory() as tmp:
+        make_data(Path(tmp), n_curves)
         _run(1, extra + ["--slip", "no-slip", "--no-profile", "--no-plot"], Path(tmp), "warm")  # numba cache
         for k in range(args.repeat):
             t_s, rows_s, c_s = _run(1, extra, Path(tmp), f"s{k}")
@@ -165,7 +183,8 @@ Command: `{r['command']}`
 Machine: python {r['python']}, nproc {r['nproc']}, adhfit revision {r['adhfit_revision']}, load average
 (1, 5, 15 min) at start {', '.join(f'{x:.2f}' for x in r['load_average_start'])}, at end
 {', '.join(f'{x:.2f}' for x in r['load_average_end'])} (the machine is shared).  
-Each run: `python -m adhfit.cli fit sample_data --workers N -o OUT` in a fresh process (imports, numba
+Each run: `python -m adhfit.cli fit DATA --workers N -o OUT` ({r['curves']} curves: the 8 sample curves copied
+set after set into DATA) in a fresh process (imports, numba
 cache load, fits, reports, summary.csv), fit options: {opts}. Runs alternate serial / parallel; the two
 summary.csv files of every pair are identical in every column but `wall_time_s`.
 
@@ -174,7 +193,7 @@ summary.csv files of every pair are identical in every column but `wall_time_s`.
 {rows}
 
 - median: serial **{r['median_s']['serial']:.1f} s**, `--workers {r['workers']}` **{r['median_s']['parallel']:.1f} s**
-- ratio of the medians: **{r['ratio_of_medians']:.2f}** (target ≤ 0.6); ratio of the mins: {r['ratio_of_mins']:.2f}
+- ratio of the medians: **{r['ratio_of_medians']:.2f}** (target ≤ 0.65); ratio of the mins: {r['ratio_of_mins']:.2f}
 {_projection_text(r)}{_autogroup_text(r)}"""
 
 

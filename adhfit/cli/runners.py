@@ -163,8 +163,15 @@ def run_local(fn: Callable, calls: Sequence[tuple], workers: int, report: Report
             report(crashed(i, "the worker process died while running this job"))
 
 
-def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report, crashed: Crashed) -> None:
+def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report, crashed: Crashed,
+             window: int | None = None) -> None:
     """Run ``fn(*call)`` for every call on the Dask distributed cluster at ``address``.
+
+    At most ``window`` jobs are on the cluster at a time (default: :data:`DASK_WINDOW_PER_THREAD` per
+    worker thread, at least :data:`DASK_WINDOW_MIN`); the next is submitted as one finishes, and a
+    finished job's result is released once reported.  So the scheduler, the workers and this process
+    hold a bounded number of jobs and results whatever the length of the batch (a batch of 1,000 curves
+    costs what one of a few dozen does: ``benchmarks/results/batch_dask.md``).
 
     Raises
     ------
@@ -180,21 +187,48 @@ def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report,
     except (OSError, TimeoutError, ValueError) as err:
         raise InputError("--scheduler", address, "the address of a running Dask scheduler, e.g. "
                          "tcp://127.0.0.1:8786", reason=f"({' '.join(str(err).split())})") from None
-    futures = []
+    if window is None:
+        window = max(DASK_WINDOW_MIN, DASK_WINDOW_PER_THREAD * _dask_threads(client))
+    running: dict = {}  # future -> index of its call
     try:
-        futures = [client.submit(fn, *call, pure=False) for call in calls]
-        index = {f.key: i for i, f in enumerate(futures)}
-        for fut in as_completed(futures):
-            i = index[fut.key]
+        queue = iter(range(len(calls)))
+
+        def submit_next(pool) -> None:
+            i = next(queue, None)
+            if i is not None:
+                fut = client.submit(fn, *calls[i], pure=False)
+                running[fut] = i
+                pool.add(fut)
+        done = as_completed()
+        for _ in range(window):
+            submit_next(done)
+        for fut in done:
+            i = running.pop(fut)
             try:
                 report(fut.result())
             except Exception as err:  # noqa: BLE001 - a lost worker or a task error: that job only
                 report(crashed(i, f"{type(err).__name__}: {err}"))
+            fut.release()
+            submit_next(done)
     except BaseException:  # Ctrl-C: the cluster drops the queued and running jobs of this batch
         try:
-            client.cancel(futures, force=True)
+            client.cancel(list(running), force=True)
         except Exception:  # noqa: BLE001 - the cluster may be gone; nothing of ours keeps running here
             pass
         raise
     finally:
         client.close(timeout=5)
+
+
+#: jobs on a Dask cluster at a time, per worker thread (enough to keep each busy while results travel)
+DASK_WINDOW_PER_THREAD = 4
+#: ... and at least this many
+DASK_WINDOW_MIN = 8
+
+
+def _dask_threads(client) -> int:
+    """The worker threads of the cluster (1 where it cannot be asked)."""
+    try:
+        return max(1, sum(client.nthreads().values()))
+    except Exception:  # noqa: BLE001 - an older distributed, or a cluster still starting
+        return 1
