@@ -24,7 +24,7 @@ from typing import Any, Callable, Sequence
 
 from ..errors import InputError
 
-__all__ = ["default_workers", "run_local", "run_dask", "WATCHDOG_PERIOD_S"]
+__all__ = ["default_workers", "run_local", "run_dask", "forks_here", "WATCHDOG_PERIOD_S"]
 
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
@@ -61,6 +61,21 @@ def _context(preload: Sequence[str] = ()):
         ctx.set_forkserver_preload(list(preload))  # a module that is not there is skipped by the server
         return ctx
     return multiprocessing.get_context("spawn")
+
+
+def forks_here() -> bool:
+    """Whether local workers are forked from this process (Linux), so start with what it has loaded."""
+    return _context().get_start_method() == "fork"
+
+
+def _import_all(modules: Sequence[str]) -> None:
+    """Import ``modules`` in this process (one that is not there is skipped, as a fork server does)."""
+    import importlib  # noqa: PLC0415
+    for name in modules:
+        try:
+            importlib.import_module(name)
+        except ImportError:
+            pass
 
 
 def _die_with_group() -> None:
@@ -155,9 +170,12 @@ def run_local(fn: Callable, calls: Sequence[tuple], workers: int, report: Report
 
     A worker process that dies breaks its pool: the jobs it took down are run again one by one, each in
     a fresh process, so that only the job that crashes is reported to ``crashed``.  ``preload``: modules
-    a fork server imports once, where processes are not forked from this one (not on Linux).
+    imported once before the workers start, here where they fork from this process (Linux), else by
+    the fork server they fork from.
     """
     ctx = _context(preload)
+    if ctx.get_start_method() == "fork":  # imported here once, each worker starts with them
+        _import_all(preload)
     for i in _pass(fn, calls, list(range(len(calls))), workers, report, crashed, ctx):
         if _pass(fn, calls, [i], 1, report, crashed, ctx):
             report(crashed(i, "the worker process died while running this job"))
