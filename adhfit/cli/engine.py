@@ -225,17 +225,11 @@ def warm_part(part: str, control: str = "displacement") -> float:
     t0 = time.perf_counter()
     fixed = {"p": 0.6} if control == "displacement" else {"d": 0.0}
     if part == "large-stretch":
-        import numpy as np  # noqa: PLC0415
-        from ..fitting.model import pieces_from_columns  # noqa: PLC0415
         from ..loading import history  # noqa: PLC0415
         from ..simulation import simulate  # noqa: PLC0415
         for slip in ("no-slip", "frictionless"):
             simulate(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
-            # a fit's interpolation kernels (force and contact radius, loading and retraction pieces)
-            h = history(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40)
-            pcs = pieces_from_columns(h.columns, control, h.counts)
-            x = np.linspace(pcs.x_tp, pcs.x_max, 5)
-            pcs.f_loading(x), pcs.f_unloading(x), pcs.a_loading(x), pcs.a_unloading(x)
+            _interpolate(history(control, slip, **fixed, w=0.2, rs=0.5, a_max=0.25, points=40), control)
     elif part == "exact":
         from ..exact import exact_history  # noqa: PLC0415
         # every fit weighs the exact membrane's effect at its optimum, with the loading end given as the
@@ -243,11 +237,24 @@ def warm_part(part: str, control: str = "displacement") -> float:
         end = {"delta_max": 0.05} if control == "displacement" else {"p_max": 0.9}
         for slip in ("no-slip", "frictionless"):
             exact_history(control, slip, **fixed, w=0.2, rs=0.5, lambda0=2.0, a_max=0.25, points=20)
-            exact_history(control, slip, **fixed, w=0.2, rs=0.5, lambda0=2.0, points=20, **end)
+            h = exact_history(control, slip, **fixed, w=0.2, rs=0.5, lambda0=2.0, points=20, **end)
+        # the fit's interpolation kernels (adhfit/core) take any history: compiled here too, so that on
+        # a cold start the second process takes them off the first one's path
+        _interpolate(h, control)
     else:
         raise ValueError(f"unknown engine part {part!r}; one of {PARTS}")
     _touch(_part_marker(part))
     return time.perf_counter() - t0
+
+
+def _interpolate(h, control: str) -> None:
+    """A fit's interpolation kernels on the history ``h`` (force and contact radius, loading and
+    retraction pieces)."""
+    import numpy as np  # noqa: PLC0415
+    from ..fitting.model import pieces_from_columns  # noqa: PLC0415
+    pcs = pieces_from_columns(h.columns, control, h.counts)
+    x = np.linspace(pcs.x_tp, pcs.x_max, 5)
+    pcs.f_loading(x), pcs.f_unloading(x), pcs.a_loading(x), pcs.a_unloading(x)
 
 
 def warm_up(control: str = "displacement", *, progress: _CompileClock | None = None) -> float:
