@@ -64,6 +64,7 @@ def _summary(out: Path) -> list[dict]:
         rows = list(csv.DictReader(fh))
     for r in rows:
         r.pop("wall_time_s")
+        r.pop("run_id", None)  # names the run: differs from run to run by design
         r["report_dir"] = str(Path(r["report_dir"]).relative_to(out))
     return rows
 
@@ -295,7 +296,9 @@ def main(argv: list[str] | None = None) -> None:
             t_s, rows_s, c_s = _run(1, extra, Path(tmp), f"s{k}")
             t_p, rows_p, c_p = _run(args.workers, extra, Path(tmp), f"p{k}")
             if rows_s != rows_p:
-                raise SystemExit("serial and parallel summaries differ")
+                diff = sorted({k for a, b in zip(rows_s, rows_p) for k in a if a[k] != b.get(k)})
+                raise SystemExit(f"serial and parallel summaries differ in {diff}: "
+                                 f"{[(a['file'], {k: (a[k], b[k]) for k in diff}) for a, b in zip(rows_s, rows_p)][:3]}")
             times["serial"].append(t_s)
             times["parallel"].append(t_p)
             cpu["serial"].append(c_s)

@@ -25,7 +25,17 @@ Each run: wall time, and the CPU time (user + system) of the command and every p
 shared machine.  Standard error of the first run is kept (the notice); with ``--tty`` the first run has
 a pseudo-terminal, so the running clock (seconds, part, kernel) is recorded as a user sees it.
 
-Writes ``benchmarks/results/first_run.md`` and ``benchmarks/results/first_run.json``.
+Where the time goes::
+
+    python benchmarks/bench_first_run.py --profile
+
+clears the cache as ``--clear-cache`` does and runs the README's fit in one process (no second process)
+with a listener on numba's compile events: each kernel's compile time (inclusive of the kernels it
+compiles, and its own), by part of the engine.  Times are wall seconds inside one process, so on a
+loaded machine they stretch with the load; the CPU time of the whole run is given beside them.
+
+Writes ``benchmarks/results/first_run.json`` (``--venv``), ``first_run_clear_cache.json``,
+``first_run_profile.json``, and ``first_run.md`` from whichever of them exist.
 """
 from __future__ import annotations
 
@@ -187,15 +197,142 @@ def run_clear(repeat: int, tty: bool) -> dict:
     return {"mode": "clear-cache", "runs": runs}
 
 
+_PROFILE = r"""
+import json, sys, time
+from numba.core import event as ev
+stack, rows = [], []
+class L(ev.Listener):
+    def on_start(self, e):
+        d = e.data["dispatcher"]
+        stack.append([f"{d.py_func.__module__}.{d.py_func.__qualname__}", str(e.data["args"]), time.perf_counter(), 0.0])
+    def on_end(self, e):
+        name, args, t0, child = stack.pop()
+        dt = time.perf_counter() - t0
+        if stack:
+            stack[-1][3] += dt
+        rows.append({"kernel": name, "signature": args, "inclusive_s": dt, "self_s": dt - child, "depth": len(stack)})
+ev.register("numba:compile", L())
+import adhfit.cli.engine as engine
+engine.compile_beside = lambda parts: {}  # everything in this process, to see it
+from adhfit.cli.main import main
+c0, t0 = time.process_time(), time.perf_counter()
+code = main(sys.argv[2:] + ["-q"])
+json.dump({"rows": rows, "cpu_s": time.process_time() - c0, "wall_s": time.perf_counter() - t0, "status": code},
+          open(sys.argv[1], "w"))
+"""
+
+
+def run_profile() -> dict:
+    import collections  # noqa: PLC0415
+    with tempfile.TemporaryDirectory(prefix="adhfit-first-run-") as tmp:
+        work = _workdir(Path(tmp))
+        removed = clear_numba_cache(ROOT / "adhfit")
+        load = os.getloadavg()
+        out = Path(tmp) / "profile.json"
+        subprocess.run([sys.executable, "-c", _PROFILE, str(out), *FIT], cwd=work, check=True,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.DEVNULL)
+        got = json.loads(out.read_text())
+    rows = got["rows"]
+    top = sorted((r for r in rows if r["depth"] == 0), key=lambda r: -r["inclusive_s"])
+    per = collections.defaultdict(lambda: [0, 0.0, set()])
+    for r in rows:
+        a = per[r["kernel"]]
+        a[0] += 1
+        a[1] += r["self_s"]
+        a[2].add(r["signature"])
+    part = collections.Counter()
+    for r in rows:
+        k = r["kernel"]
+        part["large-stretch (adhfit/core)" if k.startswith("adhfit.core") else
+             "exact membrane (adhfit/exact)" if k.startswith("adhfit.exact") else "numba's own helpers"] += r["self_s"]
+    again = sorted(((k, a) for k, a in per.items() if a[0] > 1 and k.startswith("adhfit")), key=lambda kv: -kv[1][1])
+    return {"mode": "profile", "cache_files_removed": removed, "load_1min": load[0], "cpu_s": got["cpu_s"],
+            "wall_s": got["wall_s"], "compiles": len(rows), "kernels": len(per),
+            "top_level": [{"kernel": r["kernel"], "inclusive_s": r["inclusive_s"]} for r in top],
+            "by_part_self_s": dict(part),
+            "compiled_more_than_once": [{"kernel": k, "compiles": a[0], "signatures": len(a[2]), "self_s": a[1]}
+                                        for k, a in again[:15]],
+            "compile_wall_s": sum(r["inclusive_s"] for r in top)}
+
+
+def write_markdown() -> str:
+    def load(name):
+        path = RESULTS / f"{name}.json"
+        return json.loads(path.read_text()) if path.exists() else None
+    venv, clear, prof = load("first_run"), load("first_run_clear_cache"), load("first_run_profile")
+    parts = ["# The first `adhfit fit` after `pip install`: compile included\n",
+             "The README's sample fit: `adhfit fit sample_data/fea_displacement_no-slip/curve.csv --scene "
+             "sample_data/fea_displacement_no-slip/scene.toml -o out`.  Wall times on a machine shared by four "
+             "engineers stretch with its load (the load average is given); CPU times (user + system, every "
+             "process of the run) much less.\n"]
+    for title, r in (("A fresh virtual environment", venv), ("This environment, numba's cache cleared", clear)):
+        if r is None:
+            continue
+        lines = [f"## {title}\n", f"Command: `{r['command']}` (adhfit revision {r['adhfit_revision']}, python "
+                 f"{r['python']}, nproc {r['nproc']})\n"]
+        if r.get("install_s"):
+            lines.append(f"`python -m venv` + `pip install --quiet .` (pip's wheel cache warm): "
+                         f"{', '.join(f'{x:.0f}' for x in r['install_s'])} s, not part of the first run.\n")
+        lines.append("| run | first: wall (s) | first: CPU (s) | of which the command / the second process | "
+                     "load (1 min) | second: wall (s) | second: CPU (s) |\n|---:|---:|---:|---|---:|---:|---:|")
+        for i, run in enumerate(r["runs"]):
+            f, s2 = run["first"], run["second"]
+            split = (f"{f['main_cpu_s']:.1f} / " + ", ".join(f"{c:.1f}" for c in f["other_cpu_s"])
+                     if f.get("main_cpu_s") is not None else "")
+            lines.append(f"| {i + 1} | {f['wall_s']:.1f} | {f['cpu_s']:.1f} | {split} | {f['load_1min']:.1f} | "
+                         f"{s2['wall_s']:.1f} | {s2['cpu_s']:.1f} |")
+        lines.append(f"\nMedians: first run **{r['median_first_wall_s']:.1f} s wall, {r['median_first_cpu_s']:.1f} s "
+                     f"CPU**; second run {r['median_second_wall_s']:.1f} s wall, {r['median_second_cpu_s']:.1f} s CPU.\n")
+        parts.append("\n".join(lines))
+    if prof is not None:
+        top = "\n".join(f"| `{t['kernel'].removeprefix('adhfit.')}` | {t['inclusive_s']:.1f} |" for t in prof["top_level"])
+        again = "\n".join(f"| `{a['kernel'].removeprefix('adhfit.')}` | {a['compiles']} | {a['signatures']} | "
+                           f"{a['self_s']:.1f} |" for a in prof["compiled_more_than_once"])
+        by = ", ".join(f"{k} {v:.1f} s" for k, v in sorted(prof["by_part_self_s"].items(), key=lambda kv: -kv[1]))
+        parts.append(f"""## Where the time goes
+
+Command: `python benchmarks/bench_first_run.py --profile` (one process, load {prof['load_1min']:.1f}): the fit
+took {prof['wall_s']:.0f} s wall and {prof['cpu_s']:.0f} s CPU, of which {prof['compile_wall_s']:.0f} s wall compiling:
+{prof['compiles']} compiles of {prof['kernels']} kernels, reached from {len(prof['top_level'])} kernels called from
+Python (each with one signature: control mode and slip condition are run-time arguments, so no scene
+compiles anything another would not).  By part (own compile time of each kernel): {by}.
+
+| kernel called from Python | compile, inclusive (s wall) |
+|---|---:|
+{top}
+
+Kernels compiled more than once within that run (other signatures, literal arguments, or retried
+typing), own time summed:
+
+| kernel | compiles | signatures | own time (s wall) |
+|---|---:|---:|---:|
+{again}
+""")
+    text = "\n".join(parts)
+    (RESULTS / "first_run.md").write_text(text)
+    return text
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     mode = ap.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--profile", action="store_true", help="compile time per kernel (cache cleared)")
+    mode.add_argument("--markdown", action="store_true", help="only write first_run.md from the .json files")
     mode.add_argument("--venv", action="store_true", help="a fresh virtual environment per repeat")
     mode.add_argument("--clear-cache", action="store_true", help="this environment, numba cache deleted")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--tty", action="store_true", help="the first run on a pseudo-terminal (the running clock)")
     args = ap.parse_args(argv)
     command = " ".join(["python benchmarks/bench_first_run.py", *(sys.argv[1:] if argv is None else argv)])
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    if args.markdown:
+        print(write_markdown())
+        return
+    if args.profile:
+        result = {**run_profile(), "command": command, "adhfit_revision": _revision()}
+        (RESULTS / "first_run_profile.json").write_text(json.dumps(result, indent=2) + "\n")
+        print(write_markdown())
+        return
     result = run_venv(args.repeat, args.tty) if args.venv else run_clear(args.repeat, args.tty)
     firsts = [r["first"] for r in result["runs"]]
     seconds = [r["second"] for r in result["runs"]]
@@ -209,6 +346,7 @@ def main(argv: list[str] | None = None) -> None:
     tag = "first_run" if args.venv else "first_run_clear_cache"
     (RESULTS / f"{tag}.json").write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k != "runs"}, indent=2))
+    write_markdown()
 
 
 if __name__ == "__main__":
