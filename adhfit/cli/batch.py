@@ -65,8 +65,10 @@ from .writing import writable_folder
 
 #: modules a local worker needs, imported once before the workers start (by this process, where they
 #: fork from it; else by the fork server)
-PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.stage", "adhfit.data", "adhfit.scene", "adhfit.report.json_report",
-           "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot", "matplotlib")
+PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.api", "adhfit.fitting.stage", "adhfit.fitting.assemble",
+           "adhfit.fitting.plausibility", "adhfit.data", "adhfit.scene", "adhfit.units", "pint",
+           "adhfit.report.json_report", "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot",
+           "adhfit.report.thumbnails", "matplotlib")
 
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
            "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED",
@@ -318,6 +320,9 @@ def _run_jobs(jobs: list[Job], todo: list[int], args: Namespace, fit_one: Callab
         from .engine import engine_cache_is_cold, start_engine  # noqa: PLC0415
         if runners.forks_here() or engine_cache_is_cold():
             start_engine("displacement", quiet=getattr(args, "quiet", False))
+        if runners.forks_here():  # pint's unit registry too (every fit parses units): built once
+            from ..units import registry  # noqa: PLC0415
+            registry()
     with raising():
         if kind == "local":
             runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)
