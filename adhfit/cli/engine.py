@@ -306,14 +306,17 @@ _BESIDE = ("import sys; from adhfit.cli.engine import _compile_parts; "
 
 def compile_beside(parts: list[str]) -> dict:
     """Start compiling ``parts`` in a second process (one per part, in the order given); returns
-    ``{part: process}`` (empty with fewer than two cores, or when nothing is to compile).
+    ``{part: process}`` (empty with fewer than two cores, when nothing is to compile, or in a read-only
+    install, where the parts can never be marked compiled).
 
     The process dies with this one (:func:`adhfit.cli.runners._parent_death_signal`); its failure only
     leaves the part for this process to compile."""
     from .runners import default_workers  # noqa: PLC0415
+    import os  # noqa: PLC0415
     if not parts or default_workers() < 2:
         return {}
-    import os  # noqa: PLC0415
+    if not all(os.access(_part_marker(p).parent.parent, os.W_OK) for p in parts):
+        return {}  # a read-only install: no marker says 'compiled', so this would start on every run
     import subprocess  # noqa: PLC0415
     root = str(_engines().parent)  # where this adhfit is imported from, first in the second one's path
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
