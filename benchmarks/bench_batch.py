@@ -352,7 +352,7 @@ Machine: python {r['python']}, nproc {r['nproc']}, adhfit revision {r['adhfit_re
 Each run: `python -m adhfit.cli fit DATA --workers N -o OUT` ({r['curves']} curves: the 8 sample curves copied
 set after set into DATA) in a fresh process (imports, numba
 cache load, fits, reports, summary.csv), fit options: {opts}. Runs alternate serial / parallel; the two
-summary.csv files of every pair are identical in every column but `wall_time_s`.
+summary.csv files of every pair are identical in every column but `wall_time_s` and `run_id`.
 
 | run | serial (s) | --workers {r['workers']} (s) |
 |---:|---:|---:|
