@@ -115,44 +115,31 @@ class _CompileClock:
 
 
 class _KernelWatch:
-    """The kernel numba is compiling now (its ``numba:compile`` events), for the running clock."""
+    """The kernel numba is compiling now, for the running clock (:class:`adhfit.core.jit.CompileWatch`;
+    nothing where numba cannot be imported)."""
 
     def __init__(self) -> None:
+        self._watch = None
         self._stack: list[str] = []
-        self._listener = None
 
     @property
     def current(self) -> str:
-        stack = self._stack
-        return stack[-1] if stack else ""
+        if self._watch is not None:
+            return self._watch.current
+        return self._stack[-1] if self._stack else ""
 
     def start(self) -> None:
         try:
-            from numba.core import event  # noqa: PLC0415
+            from ..core.jit import CompileWatch  # noqa: PLC0415
         except ImportError:  # no numba: nothing compiles
             return
-        stack = self._stack
-
-        class Listener(event.Listener):
-            def on_start(self, ev) -> None:
-                fn = getattr(ev.data.get("dispatcher"), "py_func", None)
-                name = getattr(fn, "__module__", "") or ""
-                if name.startswith("adhfit."):  # numba's own helpers say nothing to a user
-                    stack.append(f"{name.rsplit('.', 1)[-1]}.{fn.__name__}")
-                else:
-                    stack.append(stack[-1] if stack else "")
-
-            def on_end(self, ev) -> None:
-                if stack:
-                    stack.pop()
-        self._listener = Listener()
-        event.register("numba:compile", self._listener)
+        self._watch = CompileWatch(prefix="adhfit.", stack=self._stack)
+        self._watch.start()
 
     def stop(self) -> None:
-        if self._listener is not None:
-            from numba.core import event  # noqa: PLC0415
-            event.unregister("numba:compile", self._listener)
-            self._listener = None
+        if self._watch is not None:
+            self._watch.stop()
+            self._watch = None
 
 
 #: the engine's parts, in the order a fit needs them: the large-stretch kernels (``adhfit/core``: every
@@ -309,7 +296,7 @@ def compile_beside(parts: list[str]) -> dict:
     ``{part: process}`` (empty with fewer than two cores, when nothing is to compile, or in a read-only
     install, where the parts can never be marked compiled).
 
-    The process dies with this one (:func:`adhfit.cli.runners._parent_death_signal`); its failure only
+    The process dies with this one (:func:`adhfit.cli.runners.parent_death_signal`); its failure only
     leaves the part for this process to compile."""
     from .runners import default_workers  # noqa: PLC0415
     import os  # noqa: PLC0415
@@ -331,8 +318,8 @@ def compile_beside(parts: list[str]) -> dict:
 def _compile_parts(parts: list[str]) -> int:
     """The second process of a cold start: compile ``parts`` and leave them in numba's cache."""
     import signal  # noqa: PLC0415
-    from .runners import _parent_death_signal  # noqa: PLC0415
-    _parent_death_signal(signal.SIGTERM)
+    from .runners import parent_death_signal  # noqa: PLC0415
+    parent_death_signal(signal.SIGTERM)
     for part in parts:
         warm_part(part)
     return 0

@@ -25,7 +25,7 @@ from typing import Any, Callable, Sequence
 
 from ..errors import InputError
 
-__all__ = ["default_workers", "run_local", "run_dask", "forks_here", "WATCHDOG_PERIOD_S"]
+__all__ = ["default_workers", "run_local", "run_dask", "forks_here", "parent_death_signal", "WATCHDOG_PERIOD_S"]
 
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
@@ -93,7 +93,7 @@ def _on_sigterm(signum: int, frame) -> None:  # noqa: ARG001 - the signal module
     os._exit(128 + signal.SIGTERM)  # a process a fit forked inherited this handler: die as SIGTERM would
 
 
-def _parent_death_signal(sig: int) -> bool:
+def parent_death_signal(sig: int) -> bool:
     """Ask Linux to send ``sig`` to this process when its parent dies (prctl PR_SET_PDEATHSIG)."""
     if not sys.platform.startswith("linux"):
         return False
@@ -119,7 +119,7 @@ def _worker_init(parent: int) -> None:
     os.setpgrp()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _on_sigterm)
-    _parent_death_signal(signal.SIGTERM)
+    parent_death_signal(signal.SIGTERM)
     if os.getppid() != parent:  # the parent died before the notice was armed
         _die_with_group()
     threading.Thread(target=_watch, args=(parent,), daemon=True, name="adhfit-parent-watchdog").start()
