@@ -32,7 +32,7 @@ from .readers.formats import SNIFF_BYTES, find_format
 from .readers.tables import locate
 from .readers.text import Layout, read_bytes
 
-__all__ = ["Curve", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
+__all__ = ["Curve", "Binning", "read_curve", "COLUMNS", "MIN_ROWS", "OPTIONAL", "REQUIRED"]
 
 #: Fewest data rows a curve may have (loading and unloading both need several points).
 MIN_ROWS = 10
@@ -43,6 +43,40 @@ def _readonly(a: Any, dtype: type = float) -> np.ndarray:
     arr = np.array(a, dtype=dtype, copy=True)
     arr.setflags(write=False)
     return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Binning:
+    """How a dense curve's rows were averaged in bins of consecutive rows before a fit
+    (:func:`adhfit.fitting.segments.thin`): what the bins cannot say themselves.
+
+    Attributes
+    ----------
+    rows : int
+        Rows of the curve as read.
+    size : ndarray of int
+        Rows averaged in each bin.
+    row : ndarray
+        Mean row index (0-based, of the curve as read) of each bin: the basis of a drift in row order.
+    x_max : float
+        The largest control value of the rows as read (the loading end), m or Pa.
+    i_jump : int or None
+        The first bin after the pull-off jump (bins never straddle it), ``None`` without one.
+    gap : tuple of float or None
+        Control values of the last attached and the first detached row as read: where the data
+        place the pull-off.
+    """
+
+    rows: int
+    size: np.ndarray
+    row: np.ndarray
+    x_max: float
+    i_jump: int | None = None
+    gap: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "size", _readonly(self.size, int))
+        object.__setattr__(self, "row", _readonly(self.row))
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,6 +118,9 @@ class Curve:
     layout : str
         How the file was read, for reports (e.g. ``"tab-separated, 7 metadata line(s), units row"``),
         with any sign override.
+    binning : Binning or None
+        Set when each row is the mean of several consecutive rows as read (a dense log thinned
+        before a fit); ``line`` is then each bin's first line.
 
     All arrays are read-only copies of equal length.
     """
@@ -102,6 +139,7 @@ class Curve:
     ignored_columns: tuple[tuple[str, str], ...] = ()
     columns: Mapping[str, str] = field(default_factory=dict)
     layout: str = ""
+    binning: Binning | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -119,6 +157,8 @@ class Curve:
         if not (isinstance(self.i_turn, (int, np.integer)) and 0 <= self.i_turn < n):
             raise InputError("i_turn", self.i_turn, f"a row index in [0, {n})")
         set_(self, "i_turn", int(self.i_turn))
+        if self.binning is not None and self.binning.size.shape != (n,):
+            raise InputError("binning", f"{self.binning.size.size} bins", f"one bin per row ({n})")
         set_(self, "excluded", tuple((int(a), str(b)) for a, b in self.excluded))
         set_(self, "units", MappingProxyType(dict(self.units)))
         set_(self, "ignored_columns", tuple((str(a), str(b)) for a, b in self.ignored_columns))

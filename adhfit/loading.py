@@ -199,6 +199,10 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         if status == K.H_OK:
             break
         failures.append((pts, int(status), err.copy()))
+        limit = (_case_one_end(err, v, c, pc, slip == "no-slip", float(a_m), _grids(pts)[0])
+                 if status == K.H_FOLLOW else None)
+        if limit is not None:
+            break  # the branch's own end, shown by a second method: no other grid changes it
         if status in (K.H_END_UNREACHABLE, K.H_MC_PRESSURE, K.H_MC_STATE):
             break  # explicit states at a given radius: no other row grid changes them
         if len(failures) >= 3 and _agree(failures, SETTLED) and not (slip == "no-slip" and int(err[0]) == 2):
@@ -206,7 +210,7 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
     v["a_max"] = float(a_m)
     info = {"control": control, "slip": slip, **v}
     if status != K.H_OK:
-        _raise(failures, v, info, c, pc)
+        _raise(failures, v, info, c, pc, limit)
     cols = dict(zip(("a", "alpha", "p", "d", "f", "G", "delta"), out))
     cols["stage"] = np.repeat(_STAGE_LABELS, counts)
     cols["stable"] = np.arange(out.shape[1]) <= tp_pos
@@ -265,13 +269,46 @@ def _locator_name(stage, slip):
     return "a"
 
 
-def _raise(failures, v, info, c, pc):
+def _case_one_end(err, v, c, pc, no_slip, a_m, u_mc):
+    """A continuation stall on the Case I limit, confirmed by the limit solve (:mod:`.core.limit`):
+    its ``CaseOneEnd``, or None. ``u_mc``: the failed run's making-contact grid (its end of loading
+    is solved again as the kernel solved it)."""
+    from .core.continuation import F_STALLED  # noqa: PLC0415 - compiled kernels on first use
+    from .core.limit import case_one_end  # noqa: PLC0415
+    if int(err[1]) != F_STALLED or int(err[0]) not in (1, 2):
+        return None
+    pin = int(err[0]) == 1
+    code = (K.PIN_NS if no_slip else K.PIN_FR) if pin else (K.DEL_NS if no_slip else K.DEL_FR)
+    d_fix = float(v["d"]) if pc else 0.0
+    p_cr = float(critical_pressure(d_fix)) if pc else 0.0
+    _, out_mc, st = K._making_contact(pc, c, 0.0 if pc else float(v["p"]), d_fix, p_cr, a_m * u_mc,
+                                      np.full(5, math.nan))
+    if st != K.H_OK:
+        return None
+    return case_one_end(code, pc, float(err[4]), float(err[3]), float(err[2]), c, float(v["w"]), a_m,
+                        float(out_mc[6, -1]), d_fix)
+
+
+def _raise(failures, v, info, c, pc, limit=None):
     """Word the failure the kernel reports on every row grid tried (``failures``: (points, status,
     err) each, see core.history): an InputError for a loading end beyond the branch, a DomainError
-    where the model's end is proven (explicit states, or every grid failing at the same state of
-    the same stage), else a ConvergenceError naming the grids tried."""
+    where the model's end is proven (explicit states, a stall on the Case I limit that the limit
+    solve ``limit`` confirms, or every grid failing at the same state of the same stage), else a
+    ConvergenceError naming the grids tried."""
     slip = info["slip"]
     pts, status, err = failures[0]
+    if limit is not None:
+        stage = _STAGE_OF[int(failures[-1][2][0])]
+        name = _locator_name(stage, slip)
+        target = ("before G reaches w (the onset of delamination)" if stage == "pinning"
+                  else "before detachment")
+        raise DomainError(f"the {stage} branch ({slip}) reaches the Case I limit at {name} = "
+                          f"{limit.loc:.8g}, {target}: the membrane's tangent at the clamp turns "
+                          f"vertical there (sin theta = {limit.sigma:+.0f}, at p = {limit.kappa:.8g}) "
+                          "and past it would turn beyond vertical (Case II, outside the model)",
+                          f"the continuation stops at {name} = {float(failures[-1][2][2]):.8g} and a "
+                          "direct solve on the limit finds it there", "lower w, or change the loading end",
+                          {**info, "locator": limit.loc, "kappa": limit.kappa})
     if status == K.H_END_UNREACHABLE:  # only with a_max given to the kernel unsolved: kept for safety
         name = "p_max" if pc else "delta_max"
         raise InputError(name, v[name], f"reachable with a contact radius below {_a_cap(c):g}")

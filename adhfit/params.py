@@ -200,6 +200,8 @@ def check_scene(control: str, slip: str, *, p: float | None, d: float | None, w:
 # --- choice lists: the one place every layer (scene file, options, command line, reports) reads them ----
 #: loading modes (docs/contracts.md A1-A3)
 CONTROLS = ("displacement", "pressure")
+#: each loading mode's control variable: its key in a dimensionless history (δ or p)
+CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
 #: the two interface limits of the model
 SLIP_CONDITIONS = ("no-slip", "frictionless")
 #: slip choices of a scene or a fit: ``auto`` fits both conditions and compares them

@@ -24,6 +24,7 @@ import argparse
 import json
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -94,6 +95,7 @@ def run_one(job: dict) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "curve.csv"
         truth = rec["truth"] = rc.make_curve(job["case"], job["slip"], job["noise"], job["variant"], rng, path)
+        jump = _data_jump(path, truth)
         try:
             rep = _fit(path, scene, job["method"], int(ss.generate_state(1)[0]))
         except Exception as err:  # noqa: BLE001 - the study counts every failure, whatever its kind
@@ -109,7 +111,37 @@ def run_one(job: dict) -> dict:
     rec["delta_bic"] = slip.get("delta_bic")
     rec["warnings"] = list((rep or {}).get("warnings", []))
     rec["warned_duplicates"] = any("duplicat" in w.lower() for w in rec["warnings"])
+    rec.update(_verdict_and_fits(rep, truth, jump) if rep else {})
     return rec
+
+
+_CAME_FROM = re.compile(r"the optimum came from: (.*)$")
+
+
+def _verdict_and_fits(rep: dict, truth: dict, jump: dict) -> dict:
+    """What issue 20 checks of one fit: the evidence word, the data's jump row, and per slip condition the
+    fit's own W_ad / μh claims against the truth, its χ², the row it detaches at and the start that won."""
+    slip = rep.get("slip", {})
+    fits = {}
+    for s, f in (rep.get("fits") or {}).items():
+        pars = f.get("parameters", {})
+        came = [m.group(1) for d in f.get("diagnostics", []) if (m := _CAME_FROM.search(d))]
+        fits[s] = {name: rs.judge(pars[name], truth[name]) for name in rs.PARAMS if name in pars} | {
+            k: f.get(k) for k in ("chisqr", "ndata", "success", "misfit", "interval_widening",
+                                  "residual_autocorrelation", "first_detached_row")} | {
+            "optimum_from": came[0] if came else None}
+    return {"favoured": slip.get("favoured"), "evidence": slip.get("evidence"),
+            "parameters_from": slip.get("parameters_from"), "jump": jump, "fits": fits}
+
+
+def _data_jump(path: Path, truth: dict) -> dict:
+    """The data's own jump row: ``detect_jump`` on the CSV's force (rows as the fit numbers them), next to
+    the first row past the true turning point (``truth['first_detached_row']``)."""
+    from adhfit.fitting.segments import detect_jump  # noqa: PLC0415
+    a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    i_turn = int(np.argmax(a[:, 1]))
+    row, _ = detect_jump(a[:, 2], i_turn)
+    return {"i_turn": i_turn, "detected": row, "true": truth.get("first_detached_row")}
 
 
 def _git(*cmd: str) -> str | None:
@@ -196,6 +228,9 @@ def run(args, argv: list[str]) -> dict:
                "mcmc_settings": MCMC_SETTINGS if args.method == "mcmc" else None},
            "pooled": rs.cells(records, ("variant", "noise")),
            "cells": rs.cells(records, ("case", "slip", "variant", "noise")),
+           "issue20": {"pooled": rs.issue20(records, ("variant", "noise")),
+                       "cells": rs.issue20(records, ("case", "slip", "variant", "noise"))}
+           if any("fits" in r for r in records) else None,
            "replicates": records}
     out_path = Path(args.out)
     out_path.parent.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """Recovery study of the global fit (issue 13): series of 3 curves of one membrane (0.8, 1.2, 1.6 kPa).
 
-For each replicate one seeded series is generated (adhfit.fitting.synthetic_series: 1 or 2 % force
+For each replicate one seeded series is generated (adhfit.synthetic.synthetic_series: 1 or 2 % force
 noise, contact radius with 1 % of its largest value) and fitted twice with ``fit_global``: with the
 contact radius and without it (the same force rows).  Reported per (truth slip, noise, observables):
 median and worst relative error of W_ad and mu_h, coverage of their 95 % intervals, how often the
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from adhfit.fitting.api import fit as fit_global
-from adhfit.fitting.synthetic import synthetic_series
+from adhfit.synthetic import synthetic_series
 from adhfit.scene import load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "sample_data" / "fea_displacement_no-slip" / "scene.toml"

@@ -199,7 +199,11 @@ def summarize(scenes: list[dict], outs: list[dict], args, wall: float) -> dict:
             "counts": {k: counts.get(k, 0) for k in KINDS},
             "time_s": pct(times), "time_history_s": pct(ok_times),
             "classes": [{"kind": k, "class": c, "count": len(v), "examples": v[:KEEP]}
-                        for (k, c), v in sorted(classes.items(), key=lambda kv: -len(kv[1]))]}
+                        for (k, c), v in sorted(classes.items(), key=lambda kv: -len(kv[1]))],
+            # every solver failure, each listed (issue 24: <= 0.1 % of scenes, each named)
+            "convergence_errors": [{"scene": sc, "detail": o.get("detail", "")} for sc, o in zip(scenes, outs)
+                                   if o["kind"] in ("convergence_error", "other_exception", "nan_in_output",
+                                                    "invariant_violation")]}
 
 
 def _load() -> str:
@@ -223,6 +227,9 @@ def markdown(rep: dict) -> str:
     for c in rep["classes"]:
         ex = c["examples"][0]["scene"]
         lines.append(f"| {c['kind']} | {c['class'].replace('|', '/')} | {c['count']} | `{json.dumps(ex)}` |")
+    listed = rep.get("convergence_errors", [])
+    lines += ["", f"## Every ConvergenceError, unexpected exception, NaN and invariant violation ({len(listed)})", ""]
+    lines += [f"- `{json.dumps(f['scene'])}`: {f['detail'][:300]}" for f in listed] or ["none"]
     pc = rep.get("points_check")
     if pc:
         lines += ["", "## Summary values against 1001 rows", "",

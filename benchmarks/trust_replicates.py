@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from adhfit.fitting.api import fit as fit_curve
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from tests.test_recovery import CASES, TRUE
 
 

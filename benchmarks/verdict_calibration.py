@@ -119,7 +119,7 @@ def read_records(path: Path) -> list[dict]:
     return out
 
 
-def execute(args) -> tuple[list[dict], float]:
+def execute(args, argv: list[str]) -> tuple[list[dict], float]:
     """Run the plan's missing fits in ``--workers`` processes, appending each record to OUT.partial.jsonl."""
     from adhfit.cli import runners  # noqa: PLC0415
     jobs = plan(args)
@@ -131,9 +131,11 @@ def execute(args) -> tuple[list[dict], float]:
     done = {k: old[_key(j)] for k, j in enumerate(jobs) if _key(j) in old}
     calls = [(k, j) for k, j in enumerate(jobs) if k not in done]
     t0 = time.perf_counter()
+    source = {"commit": revision()["commit"], "command": "python benchmarks/verdict_calibration.py " + " ".join(argv)}
 
     def report(item: tuple[int, dict]) -> None:
         k, rec = item
+        rec.update(source)   # which code and which run made this record (files merged by --resume keep it)
         done[k] = rec
         with partial.open("a", encoding="utf-8") as fh:
             fh.write(json.dumps(rec, default=str) + "\n")
@@ -200,7 +202,7 @@ def run(args, argv: list[str]) -> dict:
         if args.refit_wrong:
             records = refit_wrong(records)
     else:
-        records, wall = execute(args)
+        records, wall = execute(args, argv)
     prov = provenance(argv, wall, args.workers, start)
     if args.from_records:
         prov |= _remade(args, len(records), out_json)

@@ -97,7 +97,27 @@ def summarize(recs: list[dict]) -> dict:
             "by_noise": grouped(sorted(recs, key=lambda r: r["noise"]), "noise_pct"),
             "by_variant": grouped(recs, "variant"),
             "by_case_slip": grouped(recs, "case_slip"),
+            "by_commit": grouped([dict(r, commit=r.get("commit") or "?") for r in recs], "commit"),
+            "commands": _commands(recs),
             "wrong_strong": [{k: r.get(k) for k in WRONG_FIELDS} for r in strong]}
+
+
+def _commands(recs: list[dict]) -> list[dict]:
+    """The runs the records came from (commit, command, fits), in first-seen order; records of runs that did
+    not record them count under ``?``."""
+    seen: dict[tuple, int] = {}
+    for r in recs:
+        key = (r.get("commit") or "?", r.get("command") or "?")
+        seen[key] = seen.get(key, 0) + 1
+    return [{"commit": c, "command": m, "fits": n} for (c, m), n in seen.items()]
+
+
+def _sources(t: dict) -> str:
+    if [c["commit"] for c in t.get("commands", [])] in ([], ["?"]):
+        return ""
+    lines = "\n".join(f"- {c['fits']} fits at commit {c['commit']}: `{c['command']}`" for c in t["commands"])
+    return ("## Per source (the commit each record came from)\n\n" + lines + "\n\n"
+            + cross(t["by_commit"], "commit") + "\n")
 
 
 def _run(run: dict | None) -> str:
@@ -193,6 +213,7 @@ def write_markdown(out: dict, path: Path) -> None:
         cross(t["by_noise"], "noise %"), "",
         "## Per variant\n", cross(t["by_variant"], "variant"), "",
         "## Per case and true slip\n", cross(t["by_case_slip"], "case / true slip"), "",
+        _sources(t),
         "## Wrong strong and very strong verdicts\n", _wrong_list(t["wrong_strong"]),
         "## Fits that raised\n", _errors(out["records"])]
     path.write_text("\n".join(text), encoding="utf-8")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.scene import Scene
 
 HERE = Path(__file__).resolve().parent
@@ -69,7 +69,7 @@ def main() -> None:
             (out / "curve.csv").write_text(_csv(curve, scene.control), encoding="utf-8")
             (out / "scene.toml").write_text(_toml(fields), encoding="utf-8")
             offset_key = "displacement_offset" if scene.control == "displacement" else "pressure_offset"
-            doc = {"synthetic": True, "generator": "adhfit.fitting.synthetic.synthetic_curve", "seed": SEED,
+            doc = {"synthetic": True, "generator": "adhfit.synthetic.synthetic_curve", "seed": SEED,
                    "slip": slip, "work_of_adhesion": w_ad, "mu_h": mu_h, offset_key: x_offset,
                    "force_offset": 0.0, "noise_sigma_N": truth["sigma"], "noise_fraction_of_f_max": NOISE,
                    "loading_end": x_max, "loading_end_unit": "m" if scene.control == "displacement" else "Pa",

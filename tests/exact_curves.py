@@ -1,6 +1,6 @@
 """Measured-style curves made with the exact neo-Hookean membrane (for the exact-fit tests).
 
-Built here, not with adhfit.fitting.synthetic: the history comes straight from
+Built here, not with adhfit.synthetic: the history comes straight from
 ``adhfit.exact.exact_history`` (dense), the rows are placed like a test machine's (a constant
 displacement step up to the end of loading, down past pull-off), the force is interpolated linearly
 in the history (x on loading; u = sqrt(x - x_tp) on the way out, where dF/dx is infinite at the

@@ -2,7 +2,7 @@
 
 Layers, top to bottom (a module may import its own layer and the layers below it):
 
-    cli -> report -> fitting -> scene/data -> loading/units/params -> core -> errors
+    cli -> report/planning -> fitting -> scene/data -> loading/units/params -> core -> errors
 
 The import graph is read from the source (``ast``), module-level and function-level imports alike, so
 an import hidden in a function to dodge a cycle still counts.
@@ -17,8 +17,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "adhfit"
 
 #: (prefix, layer): the first matching prefix decides (longest prefixes first)
-LAYERS = [("adhfit.cli", 7), ("adhfit.report", 6), ("adhfit.fitting", 5),
-          ("adhfit.scene", 4), ("adhfit.data", 4), ("adhfit.readers", 4), ("adhfit.physical", 4),
+LAYERS = [("adhfit.cli", 7), ("adhfit.report", 6), ("adhfit.planning", 6), ("adhfit.fitting", 5),
+          ("adhfit.scene", 4), ("adhfit.data", 4), ("adhfit.synthetic", 4), ("adhfit.readers", 4), ("adhfit.physical", 4),
           ("adhfit.loading", 3), ("adhfit.simulation", 3), ("adhfit.membranes", 3), ("adhfit.histories", 2), ("adhfit.units", 3), ("adhfit.params", 3),
           ("adhfit.core", 2), ("adhfit.exact", 2),
           ("adhfit.errors", 1)]
@@ -171,7 +171,7 @@ def test_one_engine():
     assert {t.split(".")[1] for t in loading} <= {"core", "errors", "params", "histories"}
 
 
-@pytest.mark.parametrize("module", ["adhfit.fitting.api", "adhfit.fitting.stage", "adhfit.fitting.sampling"])
+@pytest.mark.parametrize("module", ["adhfit.fitting.api", "adhfit.fitting.stage", "adhfit.fitting.bayes.sampling"])
 def test_fitting_does_not_reach_the_report_or_the_command_line(module):
     """The fitting modules the command line calls never import reports or the command line (at any depth)."""
     seen, todo = set(), [module]
@@ -199,7 +199,9 @@ def test_one_fit_path_no_twins_and_no_private_reach():
                 private += [f"{path.relative_to(root)}: {a.name}" for a in node.names
                             if a.name.startswith("_") and not a.name.startswith("__")]
     assert not private, private
-    assert len(list((root / "fitting").glob("*.py"))) <= 25
+    # issue 19: "at most ~20 modules"; the MCMC modules live in their own sub-package (fitting/bayes/)
+    assert len(list((root / "fitting").glob("*.py"))) <= 20
+    assert len(list((root / "fitting" / "bayes").glob("*.py"))) <= 6
 
 
 def test_report_has_one_writer_per_format():

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 import adhfit
@@ -93,3 +94,72 @@ def test_exact_f_min_is_the_least_force_of_the_history():
         pytest.skip("no exact history here")
     f = r.frame
     assert r.summary["f_min"]["f"] <= f.f[f.stage != "making_contact"].min() + 1e-12
+
+
+# --------------------------------------------------------------------------------------------------
+# making contact past the exact membrane's Case I limit (stress run, seed 24: 82 of 1000 exact scenes
+# were "the free membrane turns past vertical at the clamp ... did not converge")
+
+PAST_VERTICAL = dict(control="pressure", slip="frictionless", d=0.64296375436047, w=0.0693702693121474,
+                     rs=math.inf, a_max=0.677602256799158, lambda0=1.926539)
+
+
+def test_making_contact_past_the_case_one_limit_names_the_largest_a_max():
+    from adhfit.errors import InputError
+    with pytest.raises(InputError) as info:
+        adhfit.simulate(**PAST_VERTICAL, points=60, membrane="exact")
+    text = str(info.value)
+    assert info.value.name == "a_max" and "Case I exact membrane" in text
+    bound = float(text.split("[0.001, ")[1].split("]")[0])
+    # second method: the exact engine's own making-contact states either side of the bound, each solved
+    # on its own from the free inflation: Case I just below, past vertical at the clamp just above
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import march
+    from adhfit.exact.stages import PastVertical, making_contact
+    from adhfit.exact.state import Config
+    kw = {k: PAST_VERTICAL[k] for k in ("control", "slip", "d", "w", "rs", "lambda0")}
+    c = prepare(kw["control"], kw["slip"], None, kw["d"], kw["w"], kw["rs"], kw["lambda0"], 0.5 * bound,
+                None, None, 60, 8)
+    stage = making_contact(Config(c.lambda0, c.crv, c.n), c.control, c.p, c.d)
+    x0 = [c.free.lc, 1e-3 / c.free.lc, c.free.p]
+    grid = bound * (1 - 1e-4) * (0.05 + 0.95 * (1 - (1 - np.linspace(0, 1, 40)) ** 2))  # dense at the end
+    below = march(stage, list(grid), x0)
+    assert below[-1].theta_end < 0.5 * math.pi
+    with pytest.raises(PastVertical):
+        stage.solve(bound * (1 + 1e-4), stage.x(below[-1]))
+    # and a history runs just inside it
+    r = adhfit.simulate(**{**PAST_VERTICAL, "a_max": 0.999 * bound}, points=60, membrane="exact")
+    assert r.inputs["a_max"] == pytest.approx(0.999 * bound)
+
+
+#: exact pinning that turns past vertical at the clamp before G reaches w (stress run, seed 24: one of
+#: the 68 "G does not reach w before the pinning branch ends ... did not converge")
+PIN_PAST_VERTICAL = dict(control="displacement", slip="frictionless", p=0.9622870083761739,
+                         w=1.5748326323546618, rs=math.inf, a_max=0.6954599904542166,
+                         lambda0=1.2667544447593715)
+
+
+def test_exact_pinning_past_the_case_one_limit_is_a_domain_error_between_solved_states():
+    with pytest.raises(DomainError) as info:
+        adhfit.simulate(**PIN_PAST_VERTICAL, points=60, membrane="exact")
+    assert "turns past vertical at the clamp" in str(info.value) and "did not converge" not in str(info.value)
+    alpha_end = info.value.inputs["locator"]
+    # second method: the engine's pinning states solved one by one along alpha up to just below the
+    # reported limit stay Case I, the clamp angle closing on pi/2; just above it they are past vertical
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, march
+    from adhfit.exact.stages import PastVertical, pinning
+    from adhfit.exact.state import Config
+    sc = PIN_PAST_VERTICAL
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 60, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    alphas = alpha_end * (1 - np.geomspace(0.5, 1e-7, 60))
+    states = march(pin, list(alphas), pin.x(m))
+    theta = [s.theta_end for s in states]
+    assert all(t < 0.5 * math.pi for t in theta) and 0.5 * math.pi - theta[-1] < 1e-3
+    assert states[-1].G < sc["w"]
+    with pytest.raises(PastVertical):
+        pin.solve(alpha_end * (1 + 1e-6), pin.x(states[-1]))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from adhfit.core import jit
-from adhfit.errors import ConvergenceError, InputError
+from adhfit.errors import DomainError, InputError
 from adhfit.loading import history
 from adhfit.params import DIMENSIONLESS
 
@@ -15,10 +15,10 @@ FAILING = dict(control="pressure", slip="frictionless", d=-0.9, w=5.0, rs=0.05, 
 
 
 def test_a_failing_history_names_its_stage_and_inputs():
-    with pytest.raises(ConvergenceError) as info:
+    with pytest.raises(DomainError) as info:  # the Case I limit (tests/test_domain_limit.py)
         history(**FAILING)
     err = info.value
-    assert err.what.startswith("pinning (frictionless): continuation stalled")
+    assert err.what.startswith("the pinning branch (frictionless) reaches the Case I limit")
     # the failing state and every input of the scene are carried and printed
     for k in ("locator", "kappa", "d", "w", "rs", "a_max", "points"):
         assert k in err.inputs and f"{k}=" in str(err)

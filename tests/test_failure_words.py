@@ -20,7 +20,7 @@ import adhfit
 from adhfit.fitting.intervals import honest
 from adhfit.fitting.membrane import shift_text
 from adhfit.fitting.result import Estimate
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.scene import Scene
 
 TRUE = {"work_of_adhesion": 0.4, "mu_h": 2.0}

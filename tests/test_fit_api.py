@@ -11,7 +11,7 @@ import pytest
 import adhfit
 from adhfit.errors import InputError
 from adhfit.fitting.result import FitResult
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.scene import Scene
 
 SMALL_MCMC = dict(n_walkers=6, n_ensembles=2, tune_steps=10, max_steps=15, evidence_draws=60, predictive_draws=8)
@@ -79,7 +79,7 @@ def test_a_sequence_of_curves_is_one_global_fit(curve):
 
 def test_cli_mcmc_goes_through_the_same_path(tmp_path, capsys):
     from adhfit.cli import main
-    from adhfit.fitting.synthetic import measured_frame
+    from adhfit.synthetic import measured_frame
     frame, _ = measured_frame(_scene(), "no-slip", mu_h=2.0, work_of_adhesion=0.4, x_max=6e-4, rows=80,
                               noise=0.005, seed=2)
     frame.to_csv(tmp_path / "curve.csv", index=False)

@@ -10,7 +10,7 @@ import pytest
 from adhfit.data import Curve
 from adhfit.fitting.model import CurveModel, detect_jump, segment
 from adhfit.fitting.selection import compare, information_criteria
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.scene import Scene
 
 SCENES = {

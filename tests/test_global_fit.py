@@ -1,6 +1,6 @@
 """Global fit of a test series (issue 13): shared W_ad and μh, per-curve offsets, contact radius.
 
-The series is synthetic (adhfit.fitting.synthetic_series): one membrane (W_ad = 0.4 J/m², μh = 2 N/m,
+The series is synthetic (adhfit.synthetic.synthetic_series): one membrane (W_ad = 0.4 J/m², μh = 2 N/m,
 no-slip) at 0.8, 1.2 and 1.6 kPa, 1 % force noise, a contact radius with 1 % of its largest value as
 noise; the truth is the generator's input, never the fit's output.  One seeded series is fitted once
 through the command line (module fixture) and the report is checked from outside.
@@ -21,7 +21,7 @@ from adhfit.errors import InputError
 from adhfit.fitting.api import fit as fit_global
 from adhfit.fitting.model import CurveModel, Segments
 from adhfit.fitting.observables import OBSERVABLES, contact_radius_model as radius_prediction
-from adhfit.fitting.synthetic import synthetic_series
+from adhfit.synthetic import synthetic_series
 from adhfit.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -139,7 +139,7 @@ def test_radius_model_zero_outside_contact_and_missing_rows_counted():
     skipped and counted, 0 rows are used."""
     import dataclasses
     (curve, scene, truth), = _series(11, radius_noise=None, pressures=(1200.0,))
-    from adhfit.fitting.synthetic import true_contact_radius
+    from adhfit.synthetic import true_contact_radius
     a_true = true_contact_radius(scene, "no-slip", curve, truth)
     seg = Segments(n=len(curve.x), i_turn=curve.i_turn, i_jump=truth["i_jump"])
     model = CurveModel(curve, scene, "no-slip", segments=seg, fixed_split=True)

@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from adhfit.fitting.posterior import Target as SeriesTarget
+from adhfit.fitting.bayes.posterior import Target as SeriesTarget
 from adhfit.fitting.lsq import Parametrisation
 from adhfit.fitting.model import CurveModel, Segments
 from adhfit.fitting.objective import Block, Member, SharedParametrisation, objective_residual
 from adhfit.fitting.observables import OBSERVABLES, contact_radius_model as radius_prediction
-from adhfit.fitting.synthetic import synthetic_series
+from adhfit.synthetic import synthetic_series
 from adhfit.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -130,7 +130,7 @@ def test_likelihood_is_the_sum_of_independent_gaussian_blocks():
 def test_cli_global_mcmc_reduced_run(tmp_path, monkeypatch):
     """A short seeded run end to end (CI: 20 steps after tuning, one slip condition): the report carries
     the single-curve MCMC keys plus ``curves`` with posterior offsets, and the chains are saved."""
-    import adhfit.fitting.sampling as gm
+    import adhfit.fitting.bayes.sampling as gm
     from adhfit.cli import main
     from tests.test_global_fit import _write
     monkeypatch.setitem(gm.SERIES_DEFAULTS, "max_steps", 20)
@@ -186,7 +186,7 @@ def test_start_covariance_scale_is_corrected_against_the_posterior():
     """A least-squares standard error 30 times too small on one coordinate (a kink seen by a finite
     difference) is corrected from the log posterior itself: for a Gaussian target with a known
     covariance the corrected scales are within 15 % of the true ones, the right ones are left alone."""
-    from adhfit.fitting.posterior import checked_covariance
+    from adhfit.fitting.bayes.posterior import checked_covariance
     rng = np.random.default_rng(1)
     a = rng.normal(size=(4, 4))
     cov = a @ a.T + 4 * np.eye(4)
@@ -204,7 +204,7 @@ def test_start_covariance_scale_is_corrected_against_the_posterior():
 def test_a_rejected_condition_need_not_converge_only_when_negligible():
     """The convergence rule of a series: a condition the least-squares fit rejects (ΔBIC > 100) may stay
     unconverged only while its probability, raised by 20 Monte-Carlo standard errors, stays < 1e-6."""
-    from adhfit.fitting.sampling import _converged, _rejected
+    from adhfit.fitting.bayes.sampling import _converged, _rejected
     from types import SimpleNamespace as NS
     assert _rejected({"no-slip": NS(bic=-1000.0), "frictionless": NS(bic=-850.0)}) == {"frictionless"}
     assert _rejected({"no-slip": NS(bic=-1000.0), "frictionless": NS(bic=-950.0)}) == set()

@@ -1,4 +1,4 @@
-"""MCMC fit (adhfit.fitting.posterior / mcmc / diagnostics / mcmc_fit): priors integrate to one, the
+"""MCMC fit (adhfit.fitting.bayes.posterior / mcmc / diagnostics / mcmc_fit): priors integrate to one, the
 likelihood is the least-squares residual's, the sampler recovers a known Gaussian and follows its
 stopping rule, runs are reproducible from the seed, chains land in HDF5, and the fit and the CLI
 report what they should.  Kept small for CI: toy targets and tiny chains on the real model."""
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from scipy import integrate, special
 
-from adhfit.fitting.chains import diagnose
-from adhfit.fitting.mcmc import sample_posterior
-from adhfit.fitting.posterior import Prior
+from adhfit.fitting.bayes.chains import diagnose
+from adhfit.fitting.bayes.mcmc import sample_posterior
+from adhfit.fitting.bayes.posterior import Prior
 
 
 @pytest.mark.parametrize("prior", [Prior("work_of_adhesion", "loguniform", 0.01, 10.0, True),
@@ -121,7 +121,7 @@ def test_sampler_settings_out_of_range_are_one_clear_error(name, value):
 
 def test_seeded_runs_repeat_and_hdf5(tmp_path):
     pytest.importorskip("h5py")
-    from adhfit.fitting.mcmc import open_chain
+    from adhfit.fitting.bayes.mcmc import open_chain
     g = _Gauss()
     kw = dict(seed=42, n_walkers=8, n_ensembles=2, max_steps=20, progress=False)
     a = sample_posterior(g, g.mean, g.cov, path=tmp_path / "chain.h5", group="no-slip", **kw)
@@ -149,7 +149,7 @@ def small_fit(tmp_path_factory):
     from functools import partial  # noqa: PLC0415
     from adhfit.fitting.api import fit  # noqa: PLC0415
     fit_curve_mcmc = partial(fit, method="mcmc")
-    from adhfit.fitting.synthetic import synthetic_curve
+    from adhfit.synthetic import synthetic_curve
     from adhfit.scene import Scene
     LsScene = functools.partial(Scene, membrane_model="large-stretch")
     scene = LsScene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa",
@@ -186,7 +186,7 @@ def test_same_residual_as_least_squares(small_fit):
     res, _, _ = small_fit
     ch = res.raw["no-slip"]
     # rebuild the target exactly as the fit did and compare with a numerical integral over σ
-    from adhfit.fitting.posterior import Target
+    from adhfit.fitting.bayes.posterior import Target
     from adhfit.fitting.lsq import fit_slip
     from adhfit.fitting.model import CurveModel
     tg_names = res.mcmc["slips"]["no-slip"]["parameters"]
@@ -194,7 +194,7 @@ def test_same_residual_as_least_squares(small_fit):
     model = CurveModel(res.curve, _scene(), "no-slip")
     raw = fit_slip(model)
     from adhfit.fitting.objective import ObjectiveFit
-    from adhfit.fitting.posterior import default_priors
+    from adhfit.fitting.bayes.posterior import default_priors
     pri = default_priors(raw.par, [raw.par.si(raw.best.params)], {})
     tg = Target(ObjectiveFit.from_single(raw), list(raw.par.names), [pri[n] for n in raw.par.names])
     theta = ch.flat[0]
@@ -228,7 +228,7 @@ def test_outputs_and_human_report(small_fit):
     plot_predictive(res, path=out / "fit_mcmc.png")
     assert (out / "corner.png").stat().st_size > 0 and (out / "fit_mcmc.png").stat().st_size > 0
     if res.mcmc["chain_file"]:
-        from adhfit.fitting.mcmc import open_chain
+        from adhfit.fitting.bayes.mcmc import open_chain
         assert open_chain(res.mcmc["chain_file"], "frictionless/ensemble_1").iteration > 0
 
 
@@ -247,6 +247,6 @@ def test_two_processes_give_the_same_posterior(small_fit, tmp_path):
     assert two.mcmc["model_probabilities"] == res.mcmc["model_probabilities"]
     assert two.mcmc["model_evaluations"] == res.mcmc["model_evaluations"]
     if two.mcmc["chain_file"]:
-        from adhfit.fitting.mcmc import open_chain
+        from adhfit.fitting.bayes.mcmc import open_chain
         back = open_chain(two.mcmc["chain_file"], "frictionless/ensemble_1")
         np.testing.assert_array_equal(back.get_chain(), two.raw["frictionless"].chain[1])

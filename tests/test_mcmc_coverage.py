@@ -25,7 +25,7 @@ def _replicate(seed: int, **settings) -> dict:
     from functools import partial  # noqa: PLC0415
     from adhfit.fitting.api import fit  # noqa: PLC0415
     fit_curve_mcmc = partial(fit, method="mcmc")
-    from adhfit.fitting.synthetic import synthetic_curve
+    from adhfit.synthetic import synthetic_curve
     from adhfit.scene import Scene
     LsScene = functools.partial(Scene, membrane_model="large-stretch")
     scene = LsScene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa",

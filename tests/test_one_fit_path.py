@@ -19,7 +19,7 @@ import adhfit
 from adhfit.cli import main
 from adhfit.fitting.model import CurveModel
 from adhfit.fitting.observables import OBSERVABLES
-from adhfit.fitting.synthetic import synthetic_series
+from adhfit.synthetic import synthetic_series
 from adhfit.scene import Scene
 
 from .exact_curves import exact_curve, scene as exact_scene

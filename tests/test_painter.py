@@ -9,7 +9,7 @@ import pytest
 
 from adhfit.cli.painter import Painter
 from adhfit.fitting.api import fit as fit_curve
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.report.fit_plot import draw_fit, fit_view
 from adhfit.scene import Scene
 

@@ -106,7 +106,7 @@ def test_bash_blocks_parse():
     parser = _build_parser()
     for line in lines:
         args = parser.parse_args(shlex.split(line)[1:])
-        assert args.command in ("fit", "simulate"), line
+        assert args.command in ("fit", "simulate", "plan"), line
 
 
 @pytest.mark.slow

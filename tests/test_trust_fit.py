@@ -1,7 +1,7 @@
 """Fits a lab can trust (issue 9): tests stopped early, an un-tared load cell, real noise levels,
 correlated noise, a drifting zero, and the report's keys.
 
-Curves come from :func:`adhfit.fitting.synthetic.synthetic_curve` (linear interpolation of a
+Curves come from :func:`adhfit.synthetic.synthetic_curve` (linear interpolation of a
 2000-row forward history, independent of the fit's 150-row PCHIP interpolants), each with its own
 seed.  Expected values are the curves' truths, never values the fit produced.
 """
@@ -15,7 +15,7 @@ from scipy import stats
 
 from adhfit.data import Curve
 from adhfit.fitting.api import fit as fit_curve
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.scene import Scene
 
 #: the synthetic curves are made with the large-stretch model: fit with it (not the default auto)

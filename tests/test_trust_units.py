@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from adhfit.fitting.sampling import _verdict
+from adhfit.fitting.bayes.sampling import _verdict
 from adhfit.fitting.model import CurveModel
 from adhfit.fitting.checks import correlation_factor
 from adhfit.fitting.selection import compare, evidence_word
 from adhfit.fitting.starts import contact_offset
-from adhfit.fitting.synthetic import synthetic_curve
+from adhfit.synthetic import synthetic_curve
 from adhfit.scene import Scene
 
 SPHERE = Scene(membrane_radius="2 mm", substrate_radius="1 mm", control="displacement", pressure="1.2 kPa")

@@ -1,4 +1,5 @@
-"""``adhfit fit``'s options (docs/contracts.md A5, A4b, A7): the parser and what the options mean.
+"""``adhfit fit``'s options (docs/contracts.md A5, A4b, A7) and ``adhfit plan``'s (A8): the parsers and what the
+options mean.
 
 Parsing only: nothing here reads a file or runs a fit.  Invalid values end with argparse's one-line
 error (exit status 2, see :mod:`.main`) or an :class:`~adhfit.errors.InputError` naming the flag.
@@ -13,7 +14,7 @@ from ..fitting.options import DEFAULT_POINTS
 from ..membranes import membrane_choices
 from ..params import METHODS, SLIP_CHOICES
 
-__all__ = ["add_fit_arguments", "read_options", "fit_x_offset", "fit_force_offset"]
+__all__ = ["add_fit_arguments", "add_plan_arguments", "read_options", "fit_x_offset", "fit_force_offset"]
 
 
 def _seed(text: str) -> int:
@@ -143,3 +144,43 @@ def fit_force_offset(args) -> bool:
     if args.no_force_offset and args.force_offset:
         raise InputError("--no-force-offset", True, "absent when --force-offset is given")
     return not args.no_force_offset
+
+
+def add_plan_arguments(subparsers) -> argparse.ArgumentParser:
+    """Add the ``plan`` sub-command (docs/contracts.md A8) to an argparse sub-parser collection; returns its parser."""
+    p = subparsers.add_parser(
+        "plan", help="plan a test: which protocol decides W_ad, mu*h and the slip (before running it)",
+        description="Predict, for candidate protocols, the 95 % interval widths of W_ad and mu*h that a fit "
+                    "will report and the probability that it decides the slip condition; recommend the cheapest "
+                    "protocol that decides the slip (P >= 0.9) and reaches --target-precision (docs/planning.md). "
+                    "Writes DIR/plan.json, DIR/report.html and DIR/scene.toml (the recommended protocol).")
+    p.add_argument("--scene", type=Path, required=True, metavar="SCENE.toml",
+                   help="geometry, control mode, the fixed pressure or gap, membrane model")
+    p.add_argument("--work-of-adhesion", required=True, metavar="W", help="guessed W_ad, e.g. '0.3 J/m^2'")
+    p.add_argument("--mu-h", required=True, metavar="MU", help="guessed membrane stiffness, e.g. '1.5 N/m'")
+    p.add_argument("--noise", required=True, metavar="SIGMA",
+                   help="force noise as a fraction of the peak force, e.g. 0.02 or 2%%")
+    p.add_argument("--slip", choices=("both", "no-slip", "frictionless"), default="both",
+                   help="the true slip condition(s) to plan for (default both)")
+    p.add_argument("--rows", type=int, default=300, metavar="N", help="rows of the whole test (default 300)")
+    end = p.add_mutually_exclusive_group()
+    end.add_argument("--a-max", default=None, metavar="A", help="loading end: contact radius over b")
+    end.add_argument("--delta-max", default=None, metavar="X",
+                     help="loading end: largest displacement (dimensionless, or with a unit, e.g. '0.4 mm')")
+    end.add_argument("--pressure-max", default=None, metavar="Q",
+                     help="loading end: largest pressure (dimensionless, or with a unit, e.g. '1.2 kPa')")
+    p.add_argument("--vary", default=None, metavar="NAME=LO:HI[:K],...",
+                   help="span one or two settings (pressure, gap, a_max, displacement_max, pressure_max, rows, "
+                        "noise), e.g. pressure=0.5:2kPa:10,a_max=0.1:0.4:10")
+    p.add_argument("--global", dest="global_k", type=int, default=None, metavar="K",
+                   help="test series: the best set of K values of the varied pressure (or gap)")
+    p.add_argument("--radius-noise", default=None, metavar="FRACTION",
+                   help="a camera films the contact radius with this noise (fraction of the largest contact radius, "
+                        "e.g. 1%%): its information joins the widths (single tests and --global)")
+    p.add_argument("--target-precision", type=float, default=0.1, metavar="FRACTION",
+                   help="requested W_ad precision: expected 95 %% interval width over W_ad (default 0.1)")
+    p.add_argument("--membrane", choices=membrane_choices(), default=None,
+                   help="membrane model (default: the scene's; auto as the fit decides it)")
+    p.add_argument("--workers", type=_workers, default=1, metavar="N", help="local processes (default 1)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="DIR", help="output directory")
+    return p

@@ -12,6 +12,7 @@ from pathlib import Path
 from .arguments import fit_force_offset, fit_x_offset, read_options
 from .engine import EngineLoader, elapsed
 from .painter import Painter
+from .reading import reading
 from .writing import check_output_dir, exit_status, summary_text
 
 __all__ = ["run_fit"]
@@ -56,8 +57,9 @@ def _fit_one(args, painter, engine) -> int:
     sigma_a = None if getattr(args, "sigma_radius", None) is None else \
         parse_quantity(args.sigma_radius, "length", name="--sigma-radius")
     scene = load_scene(args.scene)
-    curve = read_curve(args.data, scene.control, **read_options(args))
     quiet = getattr(args, "quiet", False)
+    with reading(args.data, quiet=quiet):
+        curve = read_curve(args.data, scene.control, **read_options(args))
     startup = engine.wait(scene.control)
     mcmc = args.method == "mcmc"
     # MCMC samples the two slip conditions in two processes: one running clock here, no bars there

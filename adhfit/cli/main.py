@@ -134,6 +134,9 @@ def _fit_parser(sub) -> None:
     from .fit import run_fit  # noqa: PLC0415
     from .interrupt import interruptible  # noqa: PLC0415 - Ctrl-C: one line, status 130, no process left
     add_fit_arguments(sub).set_defaults(run=interruptible(run_fit))
+    from .arguments import add_plan_arguments  # noqa: PLC0415
+    from .plan import run_plan  # noqa: PLC0415 - the planning package loads only when a plan runs
+    add_plan_arguments(sub).set_defaults(run=interruptible(run_plan))
 
 
 def _run_simulate(args) -> int:
@@ -177,7 +180,7 @@ def _scene_kwargs(args):
     for name in ("control", "p", "d", "w", "rs", "lambda0"):
         if getattr(args, name) is not None:
             raise _Usage(f"adhfit simulate: --{name} cannot be combined with --scene (the scene sets it)")
-    from ..fitting.synthetic import parse_end  # noqa: PLC0415
+    from ..synthetic import parse_end  # noqa: PLC0415
     scene = load_scene(args.scene)
     kwargs = scene.to_dimensionless(args.mu_h, args.work_of_adhesion, slip=args.slip)
     scales = scene.scales(args.mu_h)
@@ -195,7 +198,7 @@ def _scene_kwargs(args):
 
 def _write_measured(args, scene, result) -> None:
     """The measured-style CSV of a scene run (what a testing machine records; 'adhfit fit' reads it)."""
-    from ..fitting.synthetic import loading_end_si, measured_frame  # noqa: PLC0415
+    from ..synthetic import loading_end_si, measured_frame  # noqa: PLC0415
     scales = scene.scales(args.mu_h)
     kw = result.inputs
     x_max = loading_end_si(result.frame, scene.control, scales)

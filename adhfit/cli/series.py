@@ -41,7 +41,11 @@ def run_global(args) -> int:
     out = check_output_dir(args.output if args.output is not None else Path("adhfit_global_fit"))
     jobs = _jobs(args)
     scenes = [load_scene(j.scene) for j in jobs]
-    curves = [read_curve(j.data, sc.control, **read_options(args)) for j, sc in zip(jobs, scenes)]
+    from .reading import reading  # noqa: PLC0415
+    curves = []
+    for j, sc in zip(jobs, scenes):
+        with reading(j.data, quiet=getattr(args, "quiet", False)):
+            curves.append(read_curve(j.data, sc.control, **read_options(args)))
     sigma = None if args.sigma is None else parse_quantity(args.sigma, "force", name="--sigma")
     sigma_a = None if getattr(args, "sigma_radius", None) is None else \
         parse_quantity(args.sigma_radius, "length", name="--sigma-radius")

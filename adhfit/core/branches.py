@@ -21,9 +21,12 @@ from .membrane import free_membrane, substrate_cos
 
 __all__ = ["MC", "PIN_NS", "PIN_FR", "DEL_NS", "DEL_FR", "KEY_CODES", "state", "material_target",
            "material_residual", "bracket", "is_implicit", "evaluate_batch", "first_bad", "observe",
-           "admissible"]
+           "admissible", "CLAMP_NEAR", "clamp_margin"]
 
 MC, PIN_NS, PIN_FR, DEL_NS, DEL_FR = 0, 1, 2, 3, 4
+#: a state with 1 - |sin theta(1)| below this is at the Case I limit (the clamp tangent vertical),
+#: where a branch leaves the model (:mod:`.limit` confirms it by a solve on the limit)
+CLAMP_NEAR = 1e-6
 #: rows of an observation vector
 KEY_CODES = {"a": 0, "alpha": 1, "p": 2, "d": 3, "f": 4, "G": 5, "J0": 6}
 
@@ -161,3 +164,10 @@ def admissible(ok, out):
         if not math.isfinite(out[j]):
             return False
     return True
+
+
+@jit
+def clamp_margin(code, x, kappa, loc, c, w, a_m):
+    """1 - |sin theta| at the clamp, sin theta(1) = (kappa + D)/sqrt(1 + C2): 0 at the Case I limit."""
+    _, _, D, C2, _ = unpack(code, x, kappa, loc, c, w, a_m)
+    return 1.0 - abs((kappa + D) / math.sqrt(1.0 + C2))

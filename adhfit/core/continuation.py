@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .branches import is_implicit, observe
+from .branches import admissible, is_implicit, observe
 from .jit import jit
 from .solve import solve_one
 
@@ -20,6 +20,8 @@ __all__ = ["F_OK", "F_STALLED", "F_STEPS", "GAP_CLOSE", "SCALE_LINEAR", "SCALE_L
 F_OK, F_STALLED, F_STEPS = 0, 1, 2
 #: a gap to the goal within this relative distance is closed in one step
 GAP_CLOSE = 1e-12
+#: steps above this fraction of the span solve with the nested pressure solve cut short
+SHORT_UNTIL = 1e-8
 #: step variables of follow: the locator, its logarithm, its square root
 SCALE_LINEAR, SCALE_LOG, SCALE_SQRT = 0, 1, 2
 
@@ -119,10 +121,15 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
         s_new = goal if near else ss[m - 1] + math.copysign(h, gap)
         xg, kg = _predict(ss, xs, ks, m, s_new)
         loc = _from_step(scale, s_new)
-        x, k, st = solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix)
+        # a failed step is halved, so the nested pressure solve is cut short (solve.FALLBACK_ITER)
+        # while the step is long and the predictor quadratic; the first steps of a branch (a poor
+        # predictor) and steps halved to SHORT_UNTIL of the span run it in full
+        x, k, st = solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix,
+                             m > 2 and h > SHORT_UNTIL * span)
         good = st == 0
         if good:
-            good = observe(code, x, k, loc, c, w, a_m, obs) and math.isfinite(obs[4])
+            # every observable finite: at the Case I limit J0 can be finite where the gap is not
+            good = admissible(observe(code, x, k, loc, c, w, a_m, obs), obs)
         if not good:
             h *= 0.5
             if h < 1e-10 * span:

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from .branches import (DEL_FR, DEL_NS, MC, PIN_FR, PIN_NS, admissible, evaluate_batch, first_bad,
-                       is_implicit, state)
-from .continuation import F_OK, SCALE_LINEAR, SCALE_LOG, SCALE_SQRT, follow, max_steps
+from .branches import (CLAMP_NEAR, DEL_FR, DEL_NS, MC, PIN_FR, PIN_NS, admissible, clamp_margin,
+                       evaluate_batch, first_bad, is_implicit, state)
+from .continuation import F_OK, F_STALLED, SCALE_LINEAR, SCALE_LOG, SCALE_SQRT, follow, max_steps
 from .jit import jit
 from .newton import OK, R_MC_RADIUS, bracketed, mc_pressure_rows
 from .rows import S_ONSET, assemble, extrema
@@ -29,7 +29,8 @@ H_END_UNREACHABLE = 1  # loading end beyond the largest radius: err[0] = gap res
 H_END_SOLVE = 2        # the radius of the loading end did not converge: err[0] = solver status
 H_MC_PRESSURE = 3      # making contact, no pressure for the gap: err[0] = row, err[1] = a
 H_MC_STATE = 4         # making contact outside the model: err[0] = row (last = end of loading), err[1] = a
-H_FOLLOW = 5           # continuation failed: err = stage (1 pin, 2 del), follow status, locator, kappa
+H_FOLLOW = 5           # continuation failed: err = stage (1 pin, 2 del), follow status, locator, kappa, x
+#                        (the last accepted state: locator, kappa and unknown x, NaN if explicit)
 H_STATE = 6            # a row outside the model: err = stage, row, locator
 H_EXTREMUM = 7         # an extremum search failed: err = stage, which (0 turning point, 1 f_min), locator, status
 
@@ -84,9 +85,10 @@ def _follow_rows(stage, code, pressure, l0, locs, x0, k0, c, w, a_m, L_m, d_fix,
                  max_steps(locs.size), allow_end)
     st, n_out = res[0], res[1]
     if st != F_OK or (n_out != locs.size and not allow_end):
-        path_l, path_k = res[4], res[6]
+        path_l, path_x, path_k = res[4], res[5], res[6]
         err[0], err[1] = stage, st
         err[2], err[3] = path_l[path_l.size - 1], path_k[path_k.size - 1]
+        err[4] = path_x[path_x.size - 1]
         return res, H_FOLLOW
     for i in range(n_out):  # every step follow accepts is admissible with a finite force
         if not admissible(True, res[8][:, i]):
@@ -140,6 +142,11 @@ def _delamination(pressure, no_slip, kappa_dc, c, w, a_m, L_m, d_fix, onset, on_
     if st != H_OK or res[1] == a_dl.size:
         return a_dl, res[2], res[8], math.nan, st
     branch_end = res[4][res[4].size - 1]
+    x_e, k_e = res[5][res[5].size - 1], res[6][res[6].size - 1]
+    if clamp_margin(code, x_e, k_e, branch_end, c, w, a_m) <= CLAMP_NEAR:
+        # not the branch's own end (alpha -> 0): it leaves the model at the Case I limit
+        err[0], err[1], err[2], err[3], err[4] = 2, F_STALLED, branch_end, k_e, x_e
+        return a_dl, res[2], res[8], math.nan, H_FOLLOW
     a_dl = branch_end + (a_on - branch_end) * u_dl
     xs, out, st = _to_branch_end(code, pressure, a_on, x_on, k_on, a_dl, (res[4], res[5], res[6]),
                                  kappa_dc, c, w, a_m, L_m, d_fix, err)
@@ -187,7 +194,7 @@ def run(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, end_kappa, end_ta
 
     Returns
     -------
-    status, err : int, ndarray (4,)
+    status, err : int, ndarray (5,)
         ``H_OK`` or the failure (see the ``H_*`` codes) and its state.
     a_max : float
     cols : ndarray (7, n)
@@ -202,7 +209,7 @@ def run(pressure, no_slip, kappa_dc, d_fix, p_cr, c, w, a_max, end_kappa, end_ta
         Force at the end of loading; radius where the no-slip delamination branch ends (NaN when it
         reaches detachment).
     """
-    err = np.full(4, math.nan)
+    err = np.full(5, math.nan)
     if not math.isfinite(a_max):
         a_max, st = _loading_end(c, end_kappa, end_target, end_lo, end_hi, err)
         if st != H_OK:

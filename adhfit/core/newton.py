@@ -14,7 +14,7 @@ from .branches import MC, bracket, material_residual, state
 from .jit import jit
 
 __all__ = ["OK", "FAIL_BRACKET", "FAIL_INNER", "FAIL_OUTER", "STEP", "XTOL", "MAXITER",
-           "JOINT_MAXITER", "CHORD_RATE", "R_MATERIAL", "R_MC_GAP", "R_MC_RADIUS", "bracketed",
+           "JOINT_MAXITER", "CHORD_RATE", "ACCEPT", "R_MATERIAL", "R_MC_GAP", "R_MC_RADIUS", "bracketed",
            "damped_step", "inner_one", "stop", "gap_from", "mc_gap", "mc_bracketed",
            "mc_pressure_rows"]
 
@@ -28,6 +28,12 @@ JOINT_MAXITER = 12
 #: a chord step (the last Jacobian reused) is kept up while each step is below this fraction of the
 #: step before it; otherwise the next iteration takes a fresh Jacobian
 CHORD_RATE = 0.01
+#: largest residual (material condition J0 - target, gap d - d_fix; both O(1)) of a state a solve
+#: reports converged. At the Case I limit (the clamp tangent vertical) the derivatives are infinite,
+#: a Newton step vanishes and a state ~1e-6 off its root looked converged (issue-24 audit: the
+#: continuation then walked along the limit and stalled there); a true root's residual is ~1e-13
+#: even next to the limit (measured 1.6e-11 for the gap, 8e-13 for J0)
+ACCEPT = 1e-8
 #: residuals of :func:`bracketed`: the material condition in x, the making-contact gap in kappa,
 #: the making-contact gap in the radius a (at fixed kappa)
 R_MATERIAL, R_MC_GAP, R_MC_RADIUS = 0, 1, 2
@@ -60,6 +66,9 @@ def bracketed(kind, code, kappa, loc, c, w, a_m, L_m, d_fix, x0, lo, hi):
     if not math.isfinite(rlo) or np.sign(rlo) * np.sign(rhi) > 0:
         return math.nan, FAIL_BRACKET, rlo, rhi
     neg_at_lo = rlo < 0
+    # a residual of hi's sign seen: the bracket holds a sign change, not only the edge of the
+    # domain (NaN beyond it), where the bracket also closes, on a point that is no root
+    crossed = math.isfinite(rhi)
     x = x0
     if x < min(lo, hi):
         x = min(lo, hi)
@@ -74,6 +83,7 @@ def bracketed(kind, code, kappa, loc, c, w, a_m, L_m, d_fix, x0, lo, hi):
             lo = x
         elif finite:
             hi = x
+            crossed = True
         xn = x + (-r / dr) if (finite and dr != 0) else math.nan
         inside = math.isfinite(xn) and min(lo, hi) <= xn <= max(lo, hi)
         exact = finite and r == 0
@@ -87,6 +97,12 @@ def bracketed(kind, code, kappa, loc, c, w, a_m, L_m, d_fix, x0, lo, hi):
         if done:
             if not finite:  # the bracket closed on a point outside the domain: no root
                 return math.nan, FAIL_INNER, rlo, rhi
+            if not (crossed or exact or abs(r) <= ACCEPT):
+                # the residual of the answer itself: at the domain's edge it keeps lo's sign and
+                # stays off zero (no root); a steep root's is small or of hi's sign
+                rx = _resid(kind, code, complex(x, 0.0), kappa, loc, c, w, a_m, L_m, d_fix).real
+                if not (math.isfinite(rx) and (abs(rx) <= ACCEPT or (rx < 0) != neg_at_lo)):
+                    return math.nan, FAIL_INNER, rlo, rhi
             return x, OK, rlo, rhi
     return math.nan, FAIL_INNER, rlo, rhi
 
@@ -122,7 +138,8 @@ def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
         z = material_residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
         x, last_good, done = damped_step(x, last_good, z.real, z.imag / STEP)
         if done:
-            return x, OK
+            # a vanishing step at the Case I limit is not a root (ACCEPT)
+            return (x, OK) if abs(z.real) <= ACCEPT else (math.nan, FAIL_INNER)
     return math.nan, FAIL_INNER
 
 
@@ -181,6 +198,10 @@ def gap_from(code, loc, c, w, a_m, d_fix, kappa, lo, hi):
         size = abs(step) / (1.0 + abs(kappa))
         kappa += step
         if r == 0 or stop(fresh, size, prev):
+            if abs(r) > ACCEPT:  # a vanishing step at the Case I limit is no root (ACCEPT)
+                st = state(code, 0.0, kappa, loc, c, w, a_m, True)
+                if not (st[6] and abs(st[2] - d_fix) <= ACCEPT):
+                    return math.nan, False
             return kappa, lo <= kappa <= hi
         fresh = not (size <= CHORD_RATE * prev)
         prev = size
@@ -200,7 +221,21 @@ def mc_bracketed(a, c, d_fix, l, h):
 
     Returns (kappa, status): ``OK``, ``FAIL_BRACKET`` or ``FAIL_INNER``.
     """
-    k, st, _, _ = bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (l + h), l, h)
+    k, st, rl, rh = bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (l + h), l, h)
+    if st == FAIL_BRACKET and not math.isfinite(rl) and math.isfinite(rh) and rh > 0:
+        # near p_cr a contact of radius a can be outside the model (on small, strongly curved
+        # substrates): bisect for a pressure in the model with the gap below d_fix, the low end
+        lo, hi = l, h
+        for _ in range(80):
+            m = 0.5 * (lo + hi)
+            r = mc_gap(complex(m, 0.0), a, c, d_fix).real
+            if not math.isfinite(r):
+                lo = m
+            elif r > 0:
+                hi = m
+            else:
+                k, st, _, _ = bracketed(R_MC_GAP, MC, 0.0, a, c, 0.0, 0.0, 0.0, d_fix, 0.5 * (m + h), m, h)
+                return k, st
     return k, st
 
 
@@ -241,4 +276,9 @@ def mc_pressure_rows(a, c, d_fix, lo, hi):
             ks[i], status[i] = _mc_from(a[i], c, d_fix, lo[i], hi[i], k0)
         else:
             ks[i], status[i] = mc_bracketed(a[i], c, d_fix, lo[i], hi[i])
+        if status[i] != OK and i > 0 and status[i - 1] == OK and ks[i - 1] > lo[i]:
+            # at p_cr a contact of radius a[i] can be outside the model (no residual at the
+            # bracket's low end, on coarse grids whose predictor fails); the row before's pressure
+            # is a low end with a residual (its gap at a larger radius falls below d_fix)
+            ks[i], status[i] = mc_bracketed(a[i], c, d_fix, ks[i - 1], hi[i])
     return ks, status

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .branches import PIN_NS, admissible
+from .branches import DEL_NS, PIN_NS, admissible
 from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, extremum
 from .jit import jit
 
@@ -30,10 +30,10 @@ def apex(p):
 
 @jit
 def _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w, a_m, L_m, d_fix,
-            key, sign):
-    """The extremum between ``lo`` and ``hi`` around row i of one stage: (locator, obs, status)."""
+            key, sign, k):
+    """The extremum between ``lo`` and ``hi`` around rows k..i of one stage: (locator, obs, status)."""
     n = locs.size
-    j0, j1 = max(i - 2, 0), min(i + 3, n)
+    j0, j1 = max(min(k, i) - 2, 0), min(i + 3, n)
     order = np.argsort(locs[j0:j1])
     rl = locs[j0:j1][order]
     rx = (xs[j0:j1] if implicit else np.full(j1 - j0, math.nan))[order]
@@ -108,6 +108,33 @@ def _rises_at_once(pressure, pin, kappa_dc, c, w, a_m, L_m, d_fix, key, sign, en
 
 
 @jit
+def _past_onset(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, key, sign):
+    """The extremum of delamination between the onset and its first row: (locator, obs, status);
+    the onset's own state is one of the predictor rows."""
+    code, locs, xs, implicit, out = dl
+    m = min(3, locs.size)
+    rl, rx, rk = np.empty(m + 1), np.full(m + 1, math.nan), np.empty(m + 1)
+    pin_out, pin_x = pin[4], pin[2]
+    n_pin = pin_out.shape[1]
+    # ascending locators: delamination runs from the onset inward (a falling)
+    for q in range(m):
+        rl[q], rk[q] = locs[m - 1 - q], out[2, m - 1 - q]
+        if implicit:
+            rx[q] = xs[m - 1 - q]
+    rl[m], rk[m] = a_on, pin_out[2, n_pin - 1]
+    if implicit and code == DEL_NS:  # the edge stretch ratio t carries over from pinning
+        rx[m] = pin_x[n_pin - 1]
+    elif implicit:
+        rx[m] = rx[m - 1]
+    st, loc, obs, ok = extremum(code, pressure, min(a_on, locs[0]), max(a_on, locs[0]), rl, rx, rk,
+                                0.0 if pressure else kappa_dc, c, w, a_m, L_m, d_fix, key, sign,
+                                BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER)
+    if st == E_OK and not admissible(ok, obs):
+        st = -1
+    return loc, obs, st
+
+
+@jit
 def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, ext_stage, ext_loc,
             err, end_obs):
     """Turning point (e = 0) and force minimum (e = 1) into ``summary``, ``ext_stage`` (1 pinning,
@@ -130,12 +157,19 @@ def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, e
         stage = 1 if j < pin[1].size else 2
         code, locs, xs, implicit, out = pin if stage == 1 else dl
         i = j if stage == 1 else j - pin[1].size
-        lo = locs[i - 1] if i > 0 else (0.0 if stage == 1 else a_on)
+        k = i
+        if e == 0:
+            # a flat turn: the rows before it within TURN_TOL of it are all candidates (on a dense
+            # grid the turn shows only rows after the extremum), so the bracket starts before them
+            tol = TURN_TOL * (1.0 + abs(best))
+            while k > 0 and sign * out[key, k - 1] >= sign * out[key, i] - tol:
+                k -= 1
+        lo = locs[k - 1] if k > 0 else (0.0 if stage == 1 else a_on)
         hi = locs[i + 1] if i + 1 < locs.size else locs[i]
         if e == 0:  # the turning point's bracket: f_min's state may replace it only inside it
             tp_lo, tp_hi, tp_st = min(lo, hi), max(lo, hi), stage
         loc, obs, st = _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w,
-                               a_m, L_m, d_fix, key, sign)
+                               a_m, L_m, d_fix, key, sign, k)
         if st != E_OK:
             err[0], err[1], err[2], err[3] = stage, e, loc, st
             return 1
@@ -143,6 +177,15 @@ def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, e
             # the row itself is better: the search could not re-solve an end of its bracket (the
             # end of a no-slip delamination branch, a fold); the extremum is that row
             loc, obs = locs[i], out[:, i].copy()
+        if stage == 1 and i == locs.size - 1 and dl[1].size > 0:
+            # the best row is the onset, where the branch has a kink: the extremum may lie on
+            # either side of it, between the onset and the first delamination row as well
+            loc2, obs2, st2 = _past_onset(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, key,
+                                          sign)
+            if st2 == E_OK and sign * obs2[key] > sign * obs[key]:
+                stage, loc, obs = 2, loc2, obs2
+                if e == 0:
+                    tp_lo, tp_hi, tp_st = min(a_on, dl[1][0]), max(a_on, dl[1][0]), 2
         if e == 0 and sign * end_obs[key] > sign * obs[key]:
             # the control variable rises at once on the way out: the turning point is the end of
             # loading itself (pinning's locator 0), and no row after it is stable

@@ -14,12 +14,14 @@ import numpy as np
 
 from .branches import admissible, bracket, is_implicit, material_residual, material_target, observe, state
 from .jit import jit
-from .newton import (CHORD_RATE, FAIL_OUTER, JOINT_MAXITER, MAXITER, OK, STEP, damped_step,
+from .newton import (ACCEPT, CHORD_RATE, FAIL_OUTER, JOINT_MAXITER, MAXITER, OK, STEP, damped_step,
                      gap_from, inner_one, stop)
 
 __all__ = ["FD_STEP", "pressure_one", "solve_one", "solve_batch", "solve_observe_batch",
            "derivative_row"]
 
+#: outer iterations of :func:`pressure_one`'s nested solve for a caller that can shorten its step
+FALLBACK_ITER = 12
 #: relative step of the forward differences of the joint Newton's Jacobian, sqrt(machine epsilon)
 FD_STEP = 1.4901161193847656e-08
 
@@ -52,6 +54,22 @@ def _jacobian(code, x, kappa, loc, c, w, a_m, s0, fd):
     s1 = state(code, complex(x, STEP), complex(kappa, 0.0), lc, c, w, a_m, True)
     s2 = state(code, complex(x, 0.0), complex(kappa, STEP), lc, c, w, a_m, True)
     return s1[5].imag / STEP, s1[2].imag / STEP, s2[5].imag / STEP, s2[2].imag / STEP
+
+
+@jit
+def _solved(code, x, kappa, loc, c, w, a_m, L_m, d_fix, R, G):
+    """Whether a state a pressure-control solve calls converged is a root: its residuals ``R``
+    (material) and ``G`` (gap), from the iterate before the last step, within ACCEPT, or else
+    those of the state itself (one more evaluation). At the Case I limit a vanishing step is no
+    root (``newton.ACCEPT``)."""
+    if abs(R) <= ACCEPT and abs(G) <= ACCEPT:
+        return True
+    st = state(code, x, kappa, loc, c, w, a_m, True)
+    if not st[6]:
+        return False
+    tgt = material_target(code, complex(loc, 0.0), c, a_m, L_m).real if is_implicit(code) else 0.0
+    r = st[5] - tgt if is_implicit(code) else 0.0
+    return abs(r) <= ACCEPT and abs(st[2] - d_fix) <= ACCEPT
 
 
 @jit
@@ -88,14 +106,15 @@ def _joint_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x, fd):
             x, kappa = x + dx, kappa + dk
         if exact or stop(fresh and not fd, size, prev):
             lo, hi = bracket(code, loc, c, w, a_m)
-            return x, kappa, min(lo, hi) <= x <= max(lo, hi)
+            return x, kappa, (min(lo, hi) <= x <= max(lo, hi)
+                              and _solved(code, x, kappa, loc, c, w, a_m, L_m, d_fix, R, G))
         fresh = not (size <= CHORD_RATE * prev)
         prev = size
     return math.nan, math.nan, False
 
 
 @jit
-def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
+def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, short=False):
     """Pressure control, one row: (x, kappa, status).
 
     An implicit row with a finite predictor x0 is first solved by :func:`_joint_one` (Jacobian by
@@ -122,7 +141,10 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
     lc = complex(loc, 0.0)
     converged = False
     xi = math.nan
-    for _ in range(MAXITER):
+    # from a continuation's predictor the joint Newton converges in a few steps where a state is
+    # near; a caller that can shorten its step (:func:`.continuation.follow`) gives the nested
+    # solve FALLBACK_ITER iterations, not MAXITER (failed steps cost up to 60 x 120 evaluations)
+    for _ in range(FALLBACK_ITER if short else MAXITER):
         if implicit:
             xi, _st = inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
             if math.isfinite(xi):
@@ -136,21 +158,23 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0):
             break
     if not converged:
         return math.nan, kappa, FAIL_OUTER
-    if not implicit:
-        return 0.0, kappa, OK
-    x, st = inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
+    x, st = (inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo) if implicit
+             else (0.0, OK))
+    if st == OK and not _solved(code, x, kappa, loc, c, w, a_m, L_m, d_fix, math.inf, math.inf):
+        return math.nan, kappa, FAIL_OUTER
     return x, kappa, st
 
 
 @jit
-def solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix):
-    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``.
+def solve_one(code, pressure, loc, k, xg, c, w, a_m, L_m, d_fix, short=False):
+    """One state at ``loc``: (x, kappa, status); kappa fixed at ``k`` or solved from the gap from ``k``
+    (``short``: see :func:`pressure_one`).
 
     The one-row case of :func:`solve_batch`, without its arrays.
     """
     implicit = is_implicit(code)
     if pressure:
-        return pressure_one(code, loc, c, w, a_m, L_m, d_fix, k, xg, implicit)
+        return pressure_one(code, loc, c, w, a_m, L_m, d_fix, k, xg, implicit, short)
     if implicit:
         x, st = inner_one(code, k, loc, c, w, a_m, L_m, xg, True)
         return x, k, st

@@ -10,7 +10,7 @@ from ..errors import ConvergenceError, DomainError, InputError
 from ..histories import History
 from .control import Control, prepare
 from .march import PREDICT, vertex
-from .stages import Stage, branch_end, delamination, making_contact, onset, pinning
+from .stages import PastVertical, Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
 __all__ = ["exact_history", "COLUMNS"]
@@ -144,8 +144,47 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         c.a_max = _loading_end(stage, c)
     a_vals = _cluster(c.n_mc)[1:] * c.a_max
     x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
-    states = march(stage, a_vals, x0)
+    states = march(stage, a_vals, x0, stop_ok=True)
+    if len(states) < len(a_vals):
+        if states:
+            _case_one_end(stage, c, states[-1], a_vals[len(states)])
+        march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     return [free] + states, states[-1]
+
+
+def _case_one_end(stage, c, good, a_bad):
+    """Making contact stopped between the solved Case I state ``good`` and ``a_bad``: when the state
+    at ``a_bad`` solves and turns past vertical at the clamp, bisect the solved states between them
+    for the Case I limit (every state solved from ``good``; one side Case I, the other past vertical)
+    and raise the bound: an InputError for a_max under pressure control, a DomainError under
+    displacement control (as the large-stretch model words them). Returns when not shown."""
+    lo, hi = good.a, a_bad
+    try:
+        stage.solve(hi, stage.x(good))
+        return
+    except PastVertical:
+        pass
+    except ConvergenceError:
+        return
+    while hi - lo > 1e-10 * hi:
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = stage.solve(mid, stage.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return
+    if c.control == "pressure":
+        raise InputError("a_max", c.a_max, f"a number in [0.001, {lo:.6g}], the largest contact radius "
+                         f"with a Case I exact membrane at d = {c.d:g}, lambda0 = {c.lambda0:g}",
+                         "The membrane cannot reach a larger contact radius (its tangent would turn "
+                         "past vertical at the clamp): lower a_max.")
+    raise DomainError("the exact membrane would turn past vertical at the clamp while making contact "
+                      "(Case I ends)", f"a_max must stay below {lo:.6g} at p = {c.p:g}, rs = {c.rs:g}, "
+                      f"lambda0 = {c.lambda0:g} (solved states either side of it, to 1e-10)",
+                      "lower a_max, or raise p",
+                      {"control": c.control, "slip": c.slip, "p": c.p, "rs": c.rs, "lambda0": c.lambda0,
+                       "a_max": c.a_max})
 
 
 def _bracket(pin, c, m, top):
@@ -156,11 +195,46 @@ def _bracket(pin, c, m, top):
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
     if st is None:
+        _pinning_case_one_end(pin, c, prev, prev_a)
         raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
                                "(the clamp turning past vertical, or the contact region going slack: "
                                "stretch -> 1, outside a membrane model)",
                                {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
     return prev, prev_a, st, alpha
+
+
+def _pinning_case_one_end(pin, c, good, alpha_good):
+    """Pinning stopped after the solved Case I state ``good`` (at ``alpha_good``) before G reached w:
+    when a state a little further solves and turns past vertical at the clamp, bisect the solved
+    states between them for the Case I limit and raise it as a DomainError. Returns when not shown."""
+    lo, hi = alpha_good, None
+    for step in (1e-8, 1e-6, 1e-4):
+        try:
+            pin.solve(alpha_good * (1.0 + step), pin.x(good))
+        except PastVertical:
+            hi = alpha_good * (1.0 + step)
+            break
+        except ConvergenceError:
+            continue  # no state from this guess: a longer step may still show the limit
+        else:
+            return  # a Case I state past the stop: not its end
+    if hi is None:
+        return
+    while hi - lo > 1e-10 * hi:
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = pin.solve(mid, pin.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return
+    raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp at alpha = "
+                      f"{lo:.8g}, G = {good.G:.6g}, before G reaches w = {c.w:g} (the onset of "
+                      "delamination; Case II beyond, outside the model)",
+                      "solved states either side of it, to 1e-10 in alpha",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": lo})
 
 
 def _onset(cfg, c, m):

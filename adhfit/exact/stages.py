@@ -19,6 +19,12 @@ from .state import Config, State
 __all__ = ["Stage", "making_contact", "pinning", "delamination", "onset", "branch_end"]
 
 
+class PastVertical(ConvergenceError):
+    """A solved state (residuals within tolerance) whose free membrane turns past vertical at the
+    clamp: Case II, outside the model. Callers that bracket the Case I limit between solved states
+    turn it into the domain's bound (``exact.history``)."""
+
+
 @dataclass(frozen=True)
 class Stage:
     """A one-parameter family of states."""
@@ -45,7 +51,7 @@ class Stage:
         st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets,
                          memo=self.memo, tol=tol)
         if not st.theta_end < 0.5 * math.pi:
-            raise ConvergenceError("exact membrane: the free membrane turns past vertical at the clamp "
+            raise PastVertical("exact membrane: the free membrane turns past vertical at the clamp "
                                    "(Case II, outside the model: Case I only)",
                                    {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
         return st

@@ -2,16 +2,16 @@
 
 Public names (imported on first use, so that ``adhfit simulate`` does not load lmfit):
 :func:`fit` (the one entry point: one curve or a series, least squares or MCMC), :class:`FitResult`,
-:class:`FitOptions`, :class:`CurveModel`, :func:`synthetic_curve`.
+:class:`FitOptions`, :class:`CurveModel`.  Synthetic measured curves: :mod:`adhfit.synthetic`.
 """
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["fit", "FitResult", "FitOptions", "SlipFit", "Estimate", "CurveModel", "synthetic_curve"]
+__all__ = ["fit", "FitResult", "FitOptions", "SlipFit", "Estimate", "CurveModel"]
 
 _WHERE = {"fit": ".api", "FitResult": ".result", "FitOptions": ".options", "SlipFit": ".result", "Estimate": ".result",
-          "CurveModel": ".model", "synthetic_curve": ".synthetic"}
+          "CurveModel": ".model"}
 
 
 def __getattr__(name: str):

@@ -63,6 +63,7 @@ def read_problem(data: Any, scene: Any, opts: FitOptions) -> Problem:
     from ..scene import Scene, load_scene  # noqa: PLC0415
     from .observables import OBSERVABLES, PRIMARY  # noqa: PLC0415
     from .plausibility import check_curve  # noqa: PLC0415
+    from .segments import thin  # noqa: PLC0415
     many = isinstance(data, Sequence) and not isinstance(data, (str, bytes, Path))
     datas = list(data) if many else [data]
     if not datas:
@@ -77,8 +78,9 @@ def read_problem(data: Any, scene: Any, opts: FitOptions) -> Problem:
         if c.control != sc.control:
             raise InputError("control", c.control, f"'{sc.control}' (the scene's control mode)")
         c, notes = check_curve(c, sc)  # repeated rows left out; absurd data raise here
+        c, thinned = thin(c) if opts.thin else (c, None)  # a dense log: bins of consecutive rows (said)
         prefix = f"{c.path}: " if len(datas) > 1 else ""
-        checks += [prefix + n for n in notes]
+        checks += [prefix + n for n in notes + ([thinned] if thinned else [])]
         curves.append(c)
     if len({sc.control for sc in scenes}) > 1 and opts.fit_x_offset is not None:
         raise InputError("fit_x_offset", opts.fit_x_offset, "None (the default of each control mode) when the "
@@ -112,7 +114,8 @@ def fit(data: Any, scene: Any, *, method: str = "lsq", **options: Any) -> FitRes
     **options
         The fields of :class:`~.options.FitOptions` (``slip``, ``membrane``, ``sigma``,
         ``sigma_contact_radius``, ``contact_radius``, ``fit_x_offset``, ``fit_force_offset``, ``seed``,
-        ``points``, ``profile``, ``read_options``; MCMC: ``outdir``, ``workers``, ``progress``), and the
+        ``points``, ``profile``, ``thin``, ``read_options``; MCMC: ``outdir``, ``workers``, ``progress``,
+        ``stand_in``), and the
         MCMC settings (``n_walkers``, ``max_steps``, ...: flat, or as ``mcmc={...}``).  The same for one
         curve or many.
 
@@ -134,7 +137,7 @@ def fit(data: Any, scene: Any, *, method: str = "lsq", **options: Any) -> FitRes
     from .stage import least_squares  # noqa: PLC0415
     stage = least_squares(problem, opts, profile=opts.profile and opts.method == "lsq")
     if opts.method == "mcmc":
-        from .sampling import sample  # noqa: PLC0415 - emcee loads only for MCMC
+        from .bayes.sampling import sample  # noqa: PLC0415 - emcee loads only for MCMC
         return sample(problem, stage, opts, t0)
-    from .assemble import assemble  # noqa: PLC0415
+    from .stage import assemble  # noqa: PLC0415
     return assemble(problem, stage, opts, t0)

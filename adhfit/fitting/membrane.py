@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import AdhfitError, ConvergenceError
 from .lsq import COARSE_TOL, RawFit, minimise, residual_function
 from .model import CurveModel, ModelDomainError
+from .stand_in import minimise_exact
 from .starts import Start, noise_estimate
 
 __all__ = ["Effect", "approximation_effect", "decide", "FORCE_THRESHOLD", "SHIFT_THRESHOLD", "EXACT_POINTS",
@@ -228,8 +229,11 @@ def exact_refit(raw: RawFit, effect: Effect | None, membrane: str = "exact") -> 
         starts += [Start(stiffer)] if stiffer is not None else []
     starts.append(Start(si))
     best, tried = None, []
+    stderr = _stderr(raw)
+    polish = not exact.fixed_split  # a fixed split is followed first (_follow_split), then polished once
     for s in starts:
-        res = minimise(residual, par.params(s), scale_covar=not raw.sigma_given, max_nfev=MAX_NFEV, tol=EXACT_TOL)
+        res, at = minimise_exact(exact, par, raw.scale, sigma_est, par.params(s), scale_covar=not raw.sigma_given,
+                                 stderr=stderr, max_nfev=MAX_NFEV, tol=EXACT_TOL, polish=polish)
         tried.append({**{k: float(v) for k, v in s.items()}, "chisqr": float(res.chisqr), "membrane": "exact"})
         if best is None or res.chisqr < best.chisqr:
             best = res
@@ -243,12 +247,15 @@ def exact_refit(raw: RawFit, effect: Effect | None, membrane: str = "exact") -> 
                      "clamp); --membrane large-stretch fits the approximation"})
     if exact.fixed_split:
         exact, best = _follow_split(exact, best, residual_args=(par, raw.scale, sigma_est), sigma_given=raw.sigma_given,
-                                    tried=tried)
+                                    tried=tried, stderr=stderr, at=at)
+        if at is not None:  # the stand-in's optimum, polished on the exact model itself
+            best = minimise(residual, best.params, scale_covar=not raw.sigma_given, max_nfev=MAX_NFEV, tol=EXACT_TOL)
     return RawFit(slip=raw.slip, best=best, model=exact, par=par, scale=raw.scale, sigma_given=raw.sigma_given,
                   starts=list(raw.starts) + tried, alternatives=_alternatives(raw, par.si(best.params)))
 
 
-def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given: bool, tried: list):
+def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given: bool, tried: list, stderr: dict,
+                  at: dict | None = None):
     """Refit at the detachment row the exact model itself puts pull-off at, while that differs from the
     row kept from the large-stretch fit, and then at the rows either side too, keeping the least χ² (the
     pull-off term included), for at most :data:`SPLIT_ROUNDS` rounds. Where the approximation is far off
@@ -271,7 +278,7 @@ def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given:
         if not rows:
             break
         seen.update(rows)
-        fits = [_split_fit(exact, k, best, residual_args, sigma_given, tried) for k in rows]
+        fits = [_split_fit(exact, k, best, residual_args, sigma_given, tried, stderr, at) for k in rows]
         model, res = min(fits, key=lambda mf: mf[1].chisqr)
         if not res.chisqr < best.chisqr:
             break
@@ -279,14 +286,14 @@ def _follow_split(exact: CurveModel, best, *, residual_args: tuple, sigma_given:
     return exact, best
 
 
-def _split_fit(exact: CurveModel, j: int, best, residual_args: tuple, sigma_given: bool, tried: list):
+def _split_fit(exact: CurveModel, j: int, best, residual_args: tuple, sigma_given: bool, tried: list, stderr: dict,
+               at: dict | None):
     """The exact fit with the detachment fixed before row ``j``, from ``best``'s parameters."""
     par = residual_args[0]
-    model = CurveModel(exact.curve, exact.scene, exact.slip, points=exact.points, fixed_split=True,
-                       segments=exact.segments.split_before(j, exact.force), membrane=exact.membrane)
-    model.n_histories, model.n_evaluations = exact.n_histories, exact.n_evaluations
-    res = minimise(residual_function(model, *residual_args), best.params, scale_covar=not sigma_given,
-                   max_nfev=MAX_NFEV, tol=EXACT_TOL)
+    model = exact.split_before(j)
+    res, _ = minimise_exact(model, *residual_args, best.params, scale_covar=not sigma_given, stderr=stderr,
+                            max_nfev=MAX_NFEV, tol=EXACT_TOL, at=at, polish=at is None,
+                            rounds=1)  # only compared here; the winner is polished on the exact model
     tried.append({**{k: float(v) for k, v in par.si(res.params).items()}, "chisqr": float(res.chisqr),
                   "membrane": "exact", "split": j})
     return model, res
@@ -299,6 +306,11 @@ def _alternatives(raw: RawFit, exact_si: dict) -> tuple:
     ls = raw.par.si(raw.best.params)
     return tuple(dict(alt, **{k: exact_si[k] * alt[k] / ls[k] for k in ("work_of_adhesion", "mu_h")})
                  for alt in raw.alternatives)
+
+
+def _stderr(raw: RawFit) -> dict:
+    """Internal name -> standard error of the large-stretch fit (None where it has none)."""
+    return {n: p.stderr for n, p in raw.best.params.items()}
 
 
 def _domain_start(model: CurveModel, si: dict) -> dict | None:

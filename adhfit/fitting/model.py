@@ -44,15 +44,14 @@ import numpy as np
 
 from .. import membranes
 from ..errors import AdhfitError, InputError
-from ..params import SLIP_CONDITIONS
+from ..params import CONTROL_KEY, SLIP_CONDITIONS
 from .options import DEFAULT_POINTS
 from .segments import JUMP_FRACTION, JUMP_NOISE, Segments, detect_jump, segment  # noqa: F401 (re-exported)
 
 __all__ = ["Segments", "segment", "detect_jump", "CurveModel", "Pieces", "ModelDomainError",
-           "CONTROL_KEY", "OFFSET_NAME", "DEFAULT_POINTS", "pieces_from_columns"]
+           "OFFSET_NAME", "DEFAULT_POINTS", "pieces_from_columns"]
 
 #: dimensionless control variable of each control mode (docs/contracts.md A1)
-CONTROL_KEY = {"displacement": "delta", "pressure": "p"}
 #: name of the control-variable offset (a row of adhfit.params.FITTED) per control mode
 OFFSET_NAME = {"displacement": "displacement_offset", "pressure": "pressure_offset"}
 #: extra rows tried when a history fails (the engine's continuation can stall at one row count and
@@ -177,6 +176,16 @@ def pieces_from_columns(columns: dict, control: str, counts: tuple = ()) -> Piec
                   retraction=tuple(retraction), columns=columns, counts=(n_mc, n_pin, n_dl), key=key)
 
 
+def _moved(x: np.ndarray, pcs: Pieces, d_onset: float, d_tp: float) -> np.ndarray:
+    """Where to read this model's unloading branch so that its onset of delamination and its turning point
+    appear moved by ``d_onset`` and ``d_tp`` (the loading end fixed): the piecewise-linear map from the
+    moved kinks to the model's own.  A pure shift where the kinks are not strictly ordered."""
+    xm, on, tp = pcs.x_max, pcs.x_onset, pcs.x_tp
+    if not (tp < on < xm and tp + d_tp < on + d_onset < xm):
+        return x - d_tp
+    return np.interp(x, [tp + d_tp, on + d_onset, xm], [tp, on, xm])  # beyond the fold: clamped there
+
+
 # ----------------------------------------------------------------------------------------------
 # the model
 
@@ -217,7 +226,10 @@ class CurveModel:
         self.segments = segments if segments is not None else segment(curve)
         self.x = np.asarray(curve.x, float)
         self.force = np.asarray(curve.force, float)
-        self.x_max = float(self.x[self.segments.i_turn])
+        binning = getattr(curve, "binning", None)
+        self._binning = binning
+        # the loading end: the largest control value as measured (a thinned curve's bins average it away)
+        self.x_max = float(self.x[self.segments.i_turn]) if binning is None else binning.x_max
         self._loading = self.segments.loading
         self.fixed_split = bool(fixed_split)
         # free split: every unloading row is attached or detached as the parameters say (see predict);
@@ -235,7 +247,8 @@ class CurveModel:
         if self.control == "pressure":
             self._fixed["d"] = float(unit.to_d(scene.gap))
         #: row order as a fraction of the test, 0 at the first row and 1 at the last (the drift's basis)
-        self.row_fraction = np.arange(self.x.size) / max(self.x.size - 1, 1)
+        rows = np.arange(self.x.size) if binning is None else binning.row
+        self.row_fraction = rows / max((self.x.size if binning is None else binning.rows) - 1, 1)
         self.n_histories = 0
         self.n_evaluations = 0
 
@@ -288,10 +301,19 @@ class CurveModel:
                 failure = err
         if pcs is None:
             raise ModelDomainError(f"no history: {failure}", self._named(*key)) from None
-        if len(self._cache) >= 8:
+        if len(self._cache) >= 16:
             self._cache.pop(next(iter(self._cache)))
         self._cache[key] = pcs
         return pcs
+
+    def split_before(self, j: int) -> CurveModel:
+        """This model with the detachment fixed before row ``j``, sharing the histories computed so far (the
+        split decides which rows are attached, not the history; an exact history is worth keeping)."""
+        out = CurveModel(self.curve, self.scene, self.slip, points=self.points, fixed_split=True,
+                         segments=self.segments.split_before(j, self.force), membrane=self.membrane)
+        out._cache = self._cache
+        out.n_histories, out.n_evaluations = self.n_histories, self.n_evaluations
+        return out
 
     def _history(self, kw: dict, points: int):
         """One history as arrays (no table), from the membrane model's registry entry (one attempt: the
@@ -308,7 +330,8 @@ class CurveModel:
         return 1.0 / (sc.length if self.control == "displacement" else sc.pressure)
 
     def predict(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0,
-                force_offset: float = 0.0, force_drift: float = 0.0) -> np.ndarray:
+                force_offset: float = 0.0, force_drift: float = 0.0,
+                unloading_shift: tuple[float, float] | None = None) -> np.ndarray:
         """Predicted force at every measured row, N (compressive positive).
 
         Parameters
@@ -323,6 +346,11 @@ class CurveModel:
             Added to the predicted force (load-cell zero at the first row), N.
         force_drift : float
             A linear drift of the zero from the first row to the last, N (added in row order).
+        unloading_shift : (float, float), optional
+            Moves the unloading branch's kinks, the onset of delamination and the turning point, by these
+            amounts in the control group (δ/b or p), the loading end staying put (the branch is read
+            through the piecewise-linear map between them): the exact membrane's stand-in puts this
+            model's kinks where the exact model has them (:mod:`.stand_in`).
 
         Raises
         ------
@@ -334,7 +362,10 @@ class CurveModel:
         xd = self.dimensionless_x(mu_h, x_offset)
         f = np.zeros(xd.shape)
         f[self._loading] = pcs.f_loading(xd[self._loading])
-        f[self._attached] = pcs.f_unloading(xd[self._attached])
+        xa = xd[self._attached]
+        if unloading_shift is not None:
+            xa = _moved(xa, pcs, *unloading_shift)
+        f[self._attached] = pcs.f_unloading(xa)
         if not self.fixed_split:
             f[self._attached] *= self.attached_weight(mu_h, x_offset, pcs)
         out = f * self._scales(float(mu_h)).force + force_offset
@@ -381,6 +412,9 @@ class CurveModel:
         if j is None or not self.fixed_split:
             return None
         x_a, x_d = float(self.x[j - 1]), float(self.x[j])
+        b = self._binning
+        if b is not None and b.gap is not None and j == b.i_jump:  # the gap between two rows as read
+            x_a, x_d = b.gap
         return x_a, x_d, max(abs(x_a - x_d), 1e-12 * abs(self.x_max)) / JUMP_SOFT
 
     def turning_point(self, work_of_adhesion: float, mu_h: float, x_offset: float = 0.0) -> tuple[float, float]:

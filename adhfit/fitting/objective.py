@@ -302,11 +302,8 @@ class ObjectiveFit:
 
 
 def fixed_model(model: CurveModel, j: int) -> CurveModel:
-    """``model`` with the detachment fixed before row ``j``."""
-    out = CurveModel(model.curve, model.scene, model.slip, points=model.points, fixed_split=True,
-                     segments=model.segments.split_before(j, model.force), membrane=model.membrane)
-    out.n_histories, out.n_evaluations = model.n_histories, model.n_evaluations
-    return out
+    """``model`` with the detachment fixed before row ``j`` (its histories shared)."""
+    return model.split_before(j)
 
 
 def check_splits(fit: ObjectiveFit, segs: list) -> bool:

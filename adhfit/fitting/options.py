@@ -63,6 +63,13 @@ class FitOptions:
         Rows per computed history.
     profile : bool
         Likelihood-profile intervals of the reported fit (least squares).
+    stand_in : bool
+        MCMC with the exact membrane: sample through the large-stretch model plus the exact model's
+        difference, checked on posterior draws (:mod:`.stand_in`; the exact posterior is sampled
+        directly when the check fails).  False: always sample the exact model (~10x slower).
+    thin : bool
+        Fit a curve of more than 6,000 rows as ~2,000 bins of consecutive rows (their means; the
+        report says so, :func:`.segments.thin`); False fits every row, at a cost that grows with them.
     read_options : dict
         Keywords of :func:`adhfit.data.read_curve` for curves given as paths.
     outdir : path, optional
@@ -87,6 +94,8 @@ class FitOptions:
     seed: int | None = None
     points: int = DEFAULT_POINTS
     profile: bool = True
+    thin: bool = True
+    stand_in: bool = True
     read_options: dict = field(default_factory=dict)
     outdir: Any = None
     workers: int | None = None
@@ -103,6 +112,9 @@ class FitOptions:
         _positive("sigma_contact_radius", self.sigma_contact_radius, "m")
         if not (isinstance(self.points, int) and not isinstance(self.points, bool) and 40 <= self.points <= 5000):
             raise InputError("points", self.points, "an integer in [40, 5000]")
+        for flag in ("thin", "stand_in"):
+            if not isinstance(getattr(self, flag), bool):
+                raise InputError(flag, getattr(self, flag), "True or False")
         if self.seed is not None and not (isinstance(self.seed, int) and self.seed >= 0):
             raise InputError("seed", self.seed, "a non-negative integer")
         if self.workers is not None and not (isinstance(self.workers, int) and self.workers >= 1):

@@ -13,6 +13,7 @@ first sign change with ``brentq``; each step is one history of the :class:`~.mod
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 from scipy.optimize import brentq
@@ -143,14 +144,27 @@ def _best(model: CurveModel, candidates: list[dict], rows: np.ndarray, f0: float
     return best
 
 
+#: model -> {(fit_offset, fit_force_offset): Start}: a model's data-based start is computed once (~30
+#: histories; a restart of the same slip condition from the other's optimum needs it again)
+_STARTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def data_start(model: CurveModel, *, fit_offset: bool, fit_force_offset: bool = False) -> Start:
-    """Start values for one slip condition from the data (see the module docstring).
+    """Start values for one slip condition from the data (see the module docstring; computed once per model).
 
     Raises
     ------
     ModelDomainError
         No μh in a wide range gives a history that reaches the data's largest control value.
     """
+    memo = _STARTS.setdefault(model, {})
+    key = (bool(fit_offset), bool(fit_force_offset))
+    if key not in memo:
+        memo[key] = _data_start(model, fit_offset=fit_offset, fit_force_offset=fit_force_offset)
+    return Start(memo[key])
+
+
+def _data_start(model: CurveModel, *, fit_offset: bool, fit_force_offset: bool) -> Start:
     x, seg = model.x, model.segments
     f0 = force_zero(x, model.force, seg.i_turn) if fit_force_offset else 0.0
     force = model.force - f0

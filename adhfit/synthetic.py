@@ -34,12 +34,12 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from ..data import Curve
-from ..errors import ConvergenceError, InputError
-from ..scene import Scene
-from ..simulation import simulate
-from ..units import parse_quantity
-from .model import CONTROL_KEY
+from .data import Curve
+from .errors import ConvergenceError, InputError
+from .scene import Scene
+from .simulation import simulate
+from .units import parse_quantity
+from .params import CONTROL_KEY
 
 __all__ = ["synthetic_curve", "synthetic_series", "true_contact_radius", "measured_frame", "loading_end_si",
            "parse_end"]

@@ -24,14 +24,15 @@ from typing import Mapping
 
 import numpy as np
 
-from .assemble import assemble
+from ..stage import assemble
 from .chains import diagnose
-from .selection import StudentT, importance_evidence, model_probabilities
+from ..selection import StudentT, importance_evidence, model_probabilities
 from .mcmc import ParallelMap, default_workers, sample_posterior, save_chains
-from .model import OFFSET_NAME, ModelDomainError
+from ..model import OFFSET_NAME, ModelDomainError
 from .posterior import SHARED, Target, checked_covariance, objective_priors
-from .result import Estimate, FitResult
-from .selection import SCALE, evidence_word
+from ..stand_in import check, stand_in
+from ..result import Estimate, FitResult
+from ..selection import SCALE, evidence_word
 
 __all__ = ["sample", "DEFAULTS", "SERIES_DEFAULTS", "CI_METHOD", "REJECT_DBIC", "SHORT_RUN"]
 
@@ -162,6 +163,7 @@ class _SlipJob:
     cfg: dict
     short: bool
     progress: bool | None
+    use_stand_in: bool = True
 
     def __call__(self) -> dict:
         tg, cfg = self.target, self.cfg
@@ -169,21 +171,50 @@ class _SlipJob:
         theta0 = tg.theta0()
         cov0 = best.covar if best.covar is not None else np.diag(np.full(tg.ndim, 0.05 ** 2))
         cov0, ratios = checked_covariance(tg, theta0, cov0)
-        ss_run, ss_ev = self.seed.spawn(2)
+        ss_run, ss_ev, ss_check = self.seed.spawn(3)
+        stand = self._stand_in(tg, cov0) if self.use_stand_in else None
         with ParallelMap(1) as pmap:
-            chains = sample_posterior(tg, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
-                                      n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
-                                      tune_steps=cfg["tune_steps"], tune_rounds=cfg["tune_rounds"],
-                                      check_every=cfg["check_every"],
-                                      max_steps=min(cfg["max_steps"], SHORT_RUN) if self.short else cfg["max_steps"],
-                                      group=tg.fit.slip, pmap=pmap, progress=self.progress)
+            chains = self._sample(stand or tg, theta0, cov0, ss_run, pmap)
+            check_info = None
+            if stand is not None:
+                check_info = check(tg, stand, chains.flat, *self._units(tg), np.random.default_rng(ss_check))
+                if not check_info["passed"]:  # the exact posterior itself, at the exact model's cost
+                    chains = self._sample(tg, theta0, cov0, ss_run, pmap)
+            used = stand if check_info is not None and check_info["passed"] else tg
             flat = chains.flat
-            evidence = importance_evidence(tg.log_prior, lambda th: np.array(pmap.map(tg.log_likelihood, list(th))),
+            evidence = importance_evidence(used.log_prior, lambda th: np.array(pmap.map(used.log_likelihood, list(th))),
                                            StudentT.fit(flat, df=5.0, inflate=1.2), cfg["evidence_draws"],
                                            np.random.default_rng(ss_ev))
+            if used is stand:  # ln Z_E = ln Z_S + ln E_S[L_E / L_S] (stand_in.py)
+                evidence = dataclasses.replace(evidence, log_evidence=evidence.log_evidence
+                                               + check_info["log_mean_ratio"])
             return {"chains": chains, "samples": tg.to_si(flat), "evidence": evidence,
-                    "evaluations": pmap.n_evaluations,
+                    "evaluations": pmap.n_evaluations, "stand_in": check_info,
                     "scale_corrections": {n: float(x) for n, x in zip(tg.names, ratios) if x != 1.0}}
+
+    def _sample(self, target, theta0, cov0, ss_run, pmap):
+        cfg = self.cfg
+        return sample_posterior(target, theta0, cov0, seed=int(ss_run.generate_state(1)[0]),
+                                n_walkers=cfg["n_walkers"], n_ensembles=cfg["n_ensembles"],
+                                tune_steps=cfg["tune_steps"], tune_rounds=cfg["tune_rounds"],
+                                check_every=cfg["check_every"],
+                                max_steps=min(cfg["max_steps"], SHORT_RUN) if self.short else cfg["max_steps"],
+                                group=target.fit.slip, pmap=pmap, progress=self.progress)
+
+    @staticmethod
+    def _stand_in(tg: Target, cov0: np.ndarray) -> Target | None:
+        """The exact membrane's stand-in target (stand_in.py), or None where it does not apply."""
+        sd = np.sqrt(np.clip(np.diag(cov0), 0.0, None))
+        fit = stand_in(tg.fit, stderr=dict(zip(tg.internal, map(float, sd))))
+        return None if fit is None else Target(fit, tg.names, tg.priors)
+
+    @staticmethod
+    def _units(tg: Target) -> tuple[float, float]:
+        """(σ, residual unit) of the force rows: the deviation in σ is Δr · unit / σ."""
+        fit = tg.fit
+        if fit.joint:
+            return 1.0, 1.0
+        return float(fit.sigma), float(fit.single.scale)
 
 
 _JOBS: list = []  # read by forked workers (see _run_jobs)
@@ -250,7 +281,7 @@ _LSQ_ONLY = ("The series cannot decide", "The slip condition is undecided", "The
 
 
 def _warnings(lsq_result, reported, verdict, diags, probs, rep_fit, converged, chains_saved: bool) -> list[str]:
-    from .summary import status_warnings  # noqa: PLC0415
+    from ..summary import status_warnings  # noqa: PLC0415
     out = [w for w in lsq_result.warnings if not w.startswith(_LSQ_ONLY)]
     bad = [s for s, d in diags.items() if not d["converged"]]
     if bad and not converged:
@@ -303,12 +334,13 @@ def sample(problem, stage, opts, t0: float) -> FitResult:
     rejected = _rejected(stage.summaries)
     root = np.random.SeedSequence(seed)
     seeds = dict(zip(slips, root.spawn(len(slips))))
-    jobs = [_SlipJob(targets[s], seeds[s], cfg, s in rejected, opts.progress) for s in slips]
+    jobs = [_SlipJob(targets[s], seeds[s], cfg, s in rejected, opts.progress, opts.stand_in) for s in slips]
     n_proc = min(len(slips), default_workers() if opts.workers is None else int(opts.workers))
     runs = dict(zip(slips, _run_jobs(jobs, n_proc)))
     chains = {s: r["chains"] for s, r in runs.items()}
     diags = {s: diagnose(chains[s], targets[s].names) | {"short_run": s in rejected,
-                                                        "start_scale_corrections": runs[s]["scale_corrections"]}
+                                                        "start_scale_corrections": runs[s]["scale_corrections"],
+                                                        "exact_stand_in": runs[s]["stand_in"]}
              for s in slips}
     samples = {s: r["samples"] for s, r in runs.items()}
     evid = {s: r["evidence"] for s, r in runs.items()}
@@ -370,12 +402,17 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, stage, path, t_lsq,
         "settings": cfg,
         "sampler": "emcee EnsembleSampler; moves: independence Metropolis-Hastings from a Student-t refitted "
                    f"after each of up to {cfg['tune_rounds']} tuning rounds (90 %) + differential evolution (10 %); "
-                   "see adhfit.fitting.mcmc",
+                   "see adhfit.fitting.bayes.mcmc",
         "stopping_rule": "kept chain > 50 tau_max and every tau changed < 1 % between checks, or the step cap "
                          f"({SHORT_RUN} steps for a condition the least-squares fit rejects by ΔBIC > {REJECT_DBIC:g})",
         "short_runs": sorted(rejected),
         "likelihood": "every curve's force rows (and pull-off term) and each secondary observable's rows, one "
                       "sigma per block; row splits fixed at the least-squares optimum",
+        "exact_membrane": "sampled through the large-stretch model plus the exact model's difference, linear "
+                          "about the least-squares optimum, and checked on posterior draws against the exact "
+                          "model (diagnostics.exact_stand_in: the log-likelihood ratio's spread and the largest "
+                          "force deviation in units of sigma; the exact posterior is sampled directly when the "
+                          "check fails); see adhfit.fitting.stand_in",
         "model_probabilities": probs,
         "slips": {s: {"parameters": targets[s].names, "diagnostics": diags[s], "evidence": evid[s].as_dict(),
                       "ensemble_seeds": chains[s].seeds, "chain_groups": chains[s].groups,

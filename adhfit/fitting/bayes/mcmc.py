@@ -56,9 +56,9 @@ from typing import Any
 import emcee
 import numpy as np
 
-from ..errors import InputError
+from ...errors import InputError
 from .chains import Chains, open_chain, save_chains
-from .selection import StudentT
+from ..selection import StudentT
 from .posterior import Target
 
 __all__ = ["Chains", "IndependenceMove", "sample_posterior", "save_chains", "open_chain", "ParallelMap",

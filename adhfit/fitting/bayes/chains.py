@@ -1,6 +1,6 @@
 """The sampled chains of one slip condition, and their one write to HDF5 in emcee's ``HDFBackend`` layout.
 
-:func:`adhfit.fitting.mcmc.sample_posterior` samples on emcee's in-memory backend and returns
+:func:`adhfit.fitting.bayes.mcmc.sample_posterior` samples on emcee's in-memory backend and returns
 :class:`Chains`; :func:`save_chains` writes every ensemble once (an ``HDFBackend`` during sampling
 writes at every step, a fifth of a run), and :func:`open_chain` reads one back with emcee's own reader.
 
@@ -197,7 +197,7 @@ def diagnose(chains, names: list[str]) -> dict:
 
     Parameters
     ----------
-    chains : adhfit.fitting.mcmc.Chains
+    chains : adhfit.fitting.bayes.mcmc.Chains
     names : list of str
         Parameter names (SI names, in θ order).
 

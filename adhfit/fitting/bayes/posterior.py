@@ -33,9 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special, stats
 
-from ..errors import InputError
-from .lsq import PENALTY, Parametrisation
-from .objective import Values
+from ...errors import InputError
+from ..lsq import PENALTY, Parametrisation
+from ..objective import Values
 
 __all__ = ["LogPosterior", "Prior", "Target", "default_priors", "objective_priors", "checked_covariance",
            "DEFAULT_PRIOR_FACTOR", "INTERNAL_NAMES", "SCALE_CHECK", "SHARED"]

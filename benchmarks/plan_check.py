@@ -1,0 +1,190 @@
+"""Check ``adhfit plan``'s predictions against what the fit actually does (issue 22, "Done when").
+
+For each protocol (both control modes, both true slips, slips decided and undecided), the plan predicts
+the expected 95 % interval widths of W_ad and μh and P(slip decided); then ``--replicates`` noisy curves
+are made as ``adhfit simulate --scene ... -o`` makes them (:func:`adhfit.synthetic.measured_frame`,
+written to CSV) and fitted as ``adhfit fit`` fits them (:func:`adhfit.fit` on the CSV file, default
+settings: least squares, slip auto, profiles).  Compared: the predicted widths with the median reported
+widths — per verdict class, since an undecided fit reports the hull of both slip conditions' intervals
+(pass: within 20 % for each class with at least 5 fits; the median over all fits is printed too) — and the
+predicted P(slip decided) with the observed rate of fits that select the true slip (pass: within 0.1; the
+binomial standard error of the observed rate is printed: at 30 replicates and P = 0.5 it is 0.09, so a
+0.1 bound there is about one standard error).
+
+    python benchmarks/plan_check.py --replicates 30 --workers 2 --out benchmarks/results/plan_check.md
+
+``--quick`` runs two protocols with a few replicates (what tests/test_plan_check.py runs).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+#: (name, scene file, control end, end value SI, true slip, noise fraction)
+PROTOCOLS = [
+    ("disp-deep-ns", "flat_displacement_no-slip", "displacement_max", 4e-4, "no-slip", 0.03),
+    ("disp-deep-fr", "flat_displacement_no-slip", "displacement_max", 4e-4, "frictionless", 0.03),
+    ("disp-shallow-ns", "flat_displacement_no-slip", "displacement_max", 1.3e-4, "no-slip", 0.03),
+    ("disp-shallow-fr", "flat_displacement_no-slip", "displacement_max", 1.3e-4, "frictionless", 0.03),
+    ("pres-1200-ns-2%", "flat_pressure_no-slip", "pressure_max", 1200.0, "no-slip", 0.02),
+    ("pres-1200-fr-3%", "flat_pressure_no-slip", "pressure_max", 1200.0, "frictionless", 0.03),
+    ("pres-900-ns-5%", "flat_pressure_no-slip", "pressure_max", 900.0, "no-slip", 0.05),
+    ("pres-900-fr-5%", "flat_pressure_no-slip", "pressure_max", 900.0, "frictionless", 0.05),
+]
+QUICK = [PROTOCOLS[0], PROTOCOLS[4]]
+W_AD, MU_H, ROWS = 0.3, 1.5, 300
+#: fewest replicates of a verdict class (decided / undecided) whose median width is checked
+MIN_CLASS = 5
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _scene(name: str):
+    from adhfit.scene import load_scene
+    return load_scene(ROOT / "sample_data" / name / "scene.toml")
+
+
+def predict(proto) -> dict:
+    """The plan's prediction for one protocol (its true slip only)."""
+    from adhfit.planning.evaluate import predict as one
+    from adhfit.planning.protocols import Protocol
+    name, scene, end, value, slip, noise = proto
+    e = one(Protocol(_scene(scene), end, value, ROWS, noise), (slip,), W_AD, MU_H, "large-stretch")
+    b = e["by_slip"][slip]
+    out = {"p": e["p_slip_decided"][slip], "wrong": e["p_wrong_slip"][slip], "x_max": e["settings"]["control_max"]}
+    for key, name in (("w", "work_of_adhesion"), ("mu", "mu_h")):
+        out[key] = b["ci95_width_median"][name]
+        out[f"{key}_mean"] = b["ci95_width"][name]
+        out[f"{key}_decided"] = b["ci95_width_decided"][name]
+        out[f"{key}_undecided"] = b["ci95_width_undecided"][name]
+    return out
+
+
+def replicate(job) -> dict:
+    """One simulated curve (as ``adhfit simulate --scene -o`` writes it) fitted as ``adhfit fit`` fits it."""
+    import adhfit
+    from adhfit.synthetic import measured_frame
+    proto, x_max, seed = job
+    name, scene_name, end, value, slip, noise = proto
+    scene = _scene(scene_name)
+    frame, _ = measured_frame(scene, slip, mu_h=MU_H, work_of_adhesion=W_AD, x_max=x_max, rows=ROWS, noise=noise,
+                              seed=seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "curve.csv"
+        frame.to_csv(path, index=False, float_format="%.9g")
+        try:
+            r = adhfit.fit(path, scene)
+        except Exception as err:  # noqa: BLE001 - counted, never hidden
+            return {"name": name, "error": f"{type(err).__name__}: {err}"}
+    out = {"name": name, "selected": r.slip.get("selected"), "delta_bic": r.slip.get("delta_bic"),
+           "favoured": r.slip.get("favoured")}
+    for key, par in (("w", "work_of_adhesion"), ("mu", "mu_h")):
+        ci = r.parameters[par].ci95
+        out[key] = (ci[1] - ci[0]) if ci is not None and None not in ci else None
+    return out
+
+
+def run(protocols, replicates: int, workers: int) -> list[dict]:
+    preds = {p[0]: predict(p) for p in protocols}
+    jobs = [(p, preds[p[0]]["x_max"], 1000 + k) for p in protocols for k in range(replicates)]
+    if workers > 1:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            results = pool.map(replicate, jobs, chunksize=1)
+    else:
+        results = [replicate(j) for j in jobs]
+    rows = []
+    for p in protocols:
+        name, slip = p[0], p[4]
+        rs = [r for r in results if r["name"] == name]
+        ok = [r for r in rs if "error" not in r]
+        pred = preds[name]
+        n = len(ok)
+        decided = sum(r["selected"] == slip for r in ok) / max(n, 1)
+        wrong = sum(r["selected"] not in (None, slip) for r in ok) / max(n, 1)
+        row = {"name": name, "control": "displacement" if "disp" in name else "pressure", "slip": slip,
+               "noise": p[5], "end": f"{p[2]} = {p[3]:g}", "n": n, "errors": len(rs) - n,
+               "p_pred": pred["p"], "p_obs": decided, "p_se": math.sqrt(max(decided * (1 - decided), 0.25 / n) / n),
+               "wrong_pred": pred["wrong"], "wrong_obs": wrong}
+        checks = []
+        for key in ("w", "mu"):
+            widths = [r[key] for r in ok if r[key] is not None]
+            row[f"{key}_pred"] = pred[key]
+            row[f"{key}_obs"] = float(np.median(widths)) if widths else math.nan
+            row[f"{key}_two_sided"] = len(widths)
+            row[f"{key}_ratio"] = pred[key] / row[f"{key}_obs"] if widths else math.nan
+            row[f"{key}_mean_ratio"] = pred[f"{key}_mean"] / float(np.mean(widths)) if widths else math.nan
+            for cls, sel in (("decided", lambda r: r["selected"] is not None), ("undecided", lambda r: r["selected"] is None)):
+                ws = [r[key] for r in ok if r[key] is not None and sel(r)]
+                row[f"{key}_{cls}_n"] = len(ws)
+                row[f"{key}_{cls}_ratio"] = pred[f"{key}_{cls}"] / float(np.median(ws)) if ws else math.nan
+                if len(ws) >= min(MIN_CLASS, len(rs)):
+                    checks.append(abs(row[f"{key}_{cls}_ratio"] - 1) <= 0.2)
+        # the width model is checked where the verdict's class has enough fits: the decided fits' median against
+        # the true condition's width, the undecided ones' against the hull of both conditions' intervals
+        row["pass_width"] = bool(checks) and all(checks)
+        row["pass_p"] = abs(row["p_pred"] - row["p_obs"]) <= 0.1
+        rows.append(row)
+    return rows
+
+
+def _cls(r, key) -> str:
+    parts = []
+    for cls in ("decided", "undecided"):
+        n = r[f"{key}_{cls}_n"]
+        if n:
+            parts.append(f"{cls} {r[f'{key}_{cls}_ratio']:.2f} ({n})")
+    return ", ".join(parts)
+
+
+def table(rows: list[dict]) -> str:
+    head = ("| protocol | control | true slip | noise | loading end | fits | W_ad width pred / median [J/m²] | ratio | "
+            "W_ad ratio by verdict (fits) | μh width pred / median [N/m] | ratio | μh ratio by verdict (fits) | "
+            "P(decided) pred / obs ± se | P(wrong) pred / obs | pass |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    lines = []
+    for r in rows:
+        lines.append(f"| {r['name']} | {r['control']} | {r['slip']} | {100 * r['noise']:g} % | {r['end']} | {r['n']}"
+                     f"{' (' + str(r['errors']) + ' failed)' if r['errors'] else ''} | {r['w_pred']:.3g} / {r['w_obs']:.3g}"
+                     f" ({r['w_two_sided']} two-sided) | {r['w_ratio']:.2f} | {_cls(r, 'w')} | {r['mu_pred']:.3g} / "
+                     f"{r['mu_obs']:.3g} | {r['mu_ratio']:.2f} | {_cls(r, 'mu')} | "
+                     f"{r['p_pred']:.2f} / {r['p_obs']:.2f} ± {r['p_se']:.2f} | "
+                     f"{r['wrong_pred']:.3f} / {r['wrong_obs']:.3f} | "
+                     f"{'yes' if r['pass_width'] and r['pass_p'] else ('width' if not r['pass_width'] else 'P') + ' off'} |")
+    return head + "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--replicates", type=int, default=30)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--quick", action="store_true", help="two protocols (CI)")
+    ap.add_argument("--out", type=Path, default=None, help="write the table (Markdown) here")
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    rows = run(QUICK if args.quick else PROTOCOLS, args.replicates, args.workers)
+    text = table(rows)
+    n_pass = sum(r["pass_width"] and r["pass_p"] for r in rows)
+    summary = (f"\n{n_pass} of {len(rows)} protocols pass (widths: the predicted width of each verdict class within 20 % "
+               f"of the median width the fits of that class report, for W_ad and μh, classes of ≥ {MIN_CLASS} fits; "
+               f"P(slip decided) within 0.1 of the observed rate); {time.perf_counter() - t0:.0f} s wall, "
+               f"{args.workers} workers.\n"
+               "'pred / median' compares the median of the predicted width distribution (the decided width, or the "
+               "hull of both conditions' intervals when the slip is more likely undecided) with the median of all "
+               "fits: near P(decided) = 0.5 that median flips between the two classes.\n")
+    print(text + summary)
+    if args.out is not None:
+        cmd = "python benchmarks/plan_check.py " + " ".join(argv if argv is not None else sys.argv[1:])
+        args.out.write_text(f"# adhfit plan: predictions against fits\n\nCommand: `{cmd}`\n\n{__doc__.split(chr(10) + chr(10))[1]}\n\n"
+                            f"W_ad = {W_AD} J/m², μh = {MU_H} N/m, {ROWS} rows, flat substrate, b = 2 mm, λ0 = 2, "
+                            f"large-stretch membrane (the sample scenes).\n\n" + text + summary, encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
