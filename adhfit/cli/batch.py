@@ -63,10 +63,12 @@ from .interrupt import EXIT_INTERRUPTED, on_interrupt, raising
 from .runs import RunInfo, RunLock, clear_staging, file_sha256, new_run, publish, retire, reusable_report
 from .writing import writable_folder
 
-#: modules a local worker needs, imported once by a fork server (where the workers are not forked from
-#: this process)
-PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.stage", "adhfit.data", "adhfit.scene", "adhfit.report.json_report",
-           "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot", "matplotlib")
+#: modules a local worker needs, imported once before the workers start (by this process, where they
+#: fork from it; else by the fork server)
+PRELOAD = ("adhfit.cli.fit", "adhfit.fitting.api", "adhfit.fitting.stage", "adhfit.fitting.assemble",
+           "adhfit.fitting.plausibility", "adhfit.data", "adhfit.scene", "adhfit.units", "pint",
+           "adhfit.report.json_report", "adhfit.report.markdown", "adhfit.report.html", "adhfit.report.fit_plot",
+           "adhfit.report.thumbnails", "matplotlib")
 
 __all__ = ["COLUMNS", "Job", "discover", "is_batch", "summary_row", "failed_row", "write_summary",
            "run_batch", "run_job", "Outcome", "single_scene", "SCENE_NAME", "EXIT_SOME_FAILED",
@@ -312,9 +314,15 @@ def _run_jobs(jobs: list[Job], todo: list[int], args: Namespace, fit_one: Callab
         out.row["run_id"] = run.run_id
         return out
     if kind == "local":
+        # compiled (a cold cache, with the clock) or loaded once here: where the workers fork from this
+        # process they start with the kernels in memory, instead of each loading them (a second of CPU
+        # each); elsewhere they load them from the cache this leaves
         from .engine import engine_cache_is_cold, start_engine  # noqa: PLC0415
-        if engine_cache_is_cold():  # compiled once here, with a clock, instead of in every worker at once
+        if runners.forks_here() or engine_cache_is_cold():
             start_engine("displacement", quiet=getattr(args, "quiet", False))
+        if runners.forks_here():  # pint's unit registry too (every fit parses units): built once
+            from ..units import registry  # noqa: PLC0415
+            registry()
     with raising():
         if kind == "local":
             runners.run_local(run_job, calls, how, report, crashed, preload=PRELOAD)

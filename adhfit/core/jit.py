@@ -16,7 +16,7 @@ from pathlib import Path
 from numba import njit
 from numba.core import caching
 
-__all__ = ["jit", "core_hash", "tree_hash", "key_on_tree", "KEYED_ON_CORE"]
+__all__ = ["jit", "core_hash", "tree_hash", "key_on_tree", "KEYED_ON_CORE", "CompileWatch"]
 
 _CORE = Path(__file__).resolve().parent
 #: registered folder -> its hash, computed once per process (None until first asked)
@@ -81,3 +81,53 @@ KEYED_ON_CORE = key_on_tree(_CORE)
 #: the decorator of every kernel: cached, no GIL, numpy's error model (division by zero gives inf
 #: or NaN instead of raising, as in numpy)
 jit = njit(cache=True, nogil=True, error_model="numpy")
+
+
+class CompileWatch:
+    """Which kernel numba is compiling now, from its ``numba:compile`` events (numba's event API): for a
+    progress display while the engine compiles (:mod:`adhfit.cli.engine`).
+
+    Parameters
+    ----------
+    prefix : str
+        Only kernels of modules whose name starts with it are named (numba's own helpers, compiled
+        inside them, keep the name of the kernel that needs them).
+    stack : list, optional
+        Where the names of the kernels being compiled are kept (innermost last).
+    """
+
+    def __init__(self, prefix: str = "adhfit.", stack: list | None = None) -> None:
+        self.prefix = prefix
+        self._stack = [] if stack is None else stack
+        self._listener = None
+
+    @property
+    def current(self) -> str:
+        """``module.function`` (the module's last name) of the kernel compiling now; "" when none."""
+        stack = self._stack
+        return stack[-1] if stack else ""
+
+    def start(self) -> None:
+        from numba.core import event  # noqa: PLC0415
+        stack, prefix = self._stack, self.prefix
+
+        class Listener(event.Listener):
+            def on_start(self, ev) -> None:
+                fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+                name = getattr(fn, "__module__", "") or ""
+                if name.startswith(prefix):
+                    stack.append(f"{name.rsplit('.', 1)[-1]}.{fn.__name__}")
+                else:
+                    stack.append(stack[-1] if stack else "")
+
+            def on_end(self, ev) -> None:
+                if stack:
+                    stack.pop()
+        self._listener = Listener()
+        event.register("numba:compile", self._listener)
+
+    def stop(self) -> None:
+        if self._listener is not None:
+            from numba.core import event  # noqa: PLC0415
+            event.unregister("numba:compile", self._listener)
+            self._listener = None
