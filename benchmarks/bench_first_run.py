@@ -280,9 +280,9 @@ READING = """## Reading
   was quiet (load 1.2-1.4): 49.6, 49.8 and 48.6 s wall, the command 47.7-49.0 s of CPU and the second
   process 25.5-27.0 s beside it; the second run 2.0 s. The same at load 12-15 took 5-10 minutes (tables
   above): the wall time of a compile is the machine's load.
-- Later runs are unchanged: a warm one-file fit 2.66 s CPU against 2.57 s before (farm-bench, 5 runs
-  each in turn, A/B 1.02; wall 4.2 against 4.4 s at load 14); the second run after the fresh install
-  2.0 s wall, 2.4-2.5 s CPU.
+- Later runs are unchanged: a warm one-file fit 2.07 s wall and 2.70 s CPU, the same as main without
+  this branch (db073ba: 2.07 s, 2.70 s; farm-bench, 5 runs each in turn on a quiet machine, A/B CPU
+  1.00, wall 1.01); the second run after the fresh install 2.0 s wall, 2.4-2.5 s CPU.
 """
 
 
