@@ -261,10 +261,11 @@ READING = """## Reading
 - **What changed.** A cold start now compiles the exact membrane's kernels (and the fit's interpolation
   kernels, on an exact history) in a second process while the command compiles the large-stretch
   kernels (`adhfit/cli/engine.py`, `warm_up`); the two folders share no kernel, so nothing is compiled
-  twice. The command's own CPU time, the longer path, went from 82-90 s (one process: before, at load 7;
-  the profile, at load 14) to 49.6 s at load 4 (56-64 s at load 12-15); the run's total CPU rose by
-  ~5-7 s (the second process's own imports). On a terminal the clock names the part and the kernel
-  compiling (`adhfit: compiling the engine (once; about a minute)… 23 s · large-stretch: history._pinning`).
+  twice. In a fresh virtual environment on the quiet machine: **81.3 s wall before (main at db073ba, one
+  process, 77 s of CPU) against 49.6 s now** (the command 49 s of CPU, the second process 26 s beside
+  it); the run's total CPU is about the same (78 against 74-76 s). On a terminal the clock names the
+  part and the kernel compiling (`adhfit: compiling the engine (once; about a minute)… 23 s ·
+  large-stretch: history._pinning`).
 - **Compile only what the scene needs**: nothing to gain here. Every kernel has one signature whatever
   the control mode and the slip condition (run-time arguments), the sample's fit uses both parts (its
   search the large-stretch kernels, its weighing of the approximation the exact ones), and `warm_up`
@@ -280,9 +281,9 @@ READING = """## Reading
   was quiet (load 1.2-1.4): 49.6, 49.8 and 48.6 s wall, the command 47.7-49.0 s of CPU and the second
   process 25.5-27.0 s beside it; the second run 2.0 s. The same at load 12-15 took 5-10 minutes (tables
   above): the wall time of a compile is the machine's load.
-- Later runs are unchanged: a warm one-file fit 2.66 s CPU against 2.57 s before (farm-bench, 5 runs
-  each in turn, A/B 1.02; wall 4.2 against 4.4 s at load 14); the second run after the fresh install
-  2.0 s wall, 2.4-2.5 s CPU.
+- Later runs are unchanged: a warm one-file fit 2.07 s wall and 2.70 s CPU, the same as main without
+  this branch (db073ba: 2.07 s, 2.70 s; farm-bench, 5 runs each in turn on a quiet machine, A/B CPU
+  1.00, wall 1.01); the second run after the fresh install 2.0 s wall, 2.4-2.5 s CPU.
 """
 
 
@@ -294,12 +295,15 @@ def write_markdown() -> str:
     before = load("first_run_before")  # the same --clear-cache command on the code before, kept by hand
     busy = load("first_run_clear_cache_busy")  # an earlier --clear-cache run at load 12-14, kept by hand
     venv_busy = load("first_run_venv_busy")  # an earlier --venv run beside a test run of this checkout
+    venv_before = load("first_run_venv_before")  # the same --venv command on main without this work
     parts = ["# The first `adhfit fit` after `pip install`: compile included\n",
              "The README's sample fit: `adhfit fit sample_data/fea_displacement_no-slip/curve.csv --scene "
              "sample_data/fea_displacement_no-slip/scene.toml -o out`.  Wall times on a machine shared by four "
              "engineers stretch with its load (the load average is given); CPU times (user + system, every "
              "process of the run) much less.\n"]
     for title, r in (("A fresh virtual environment", venv),
+                     ("Before: a fresh virtual environment, main without this work (db073ba; one process)",
+                      venv_before),
                      ("A fresh virtual environment, an earlier run beside a test run (a compile) of mine", venv_busy),
                      ("This environment, numba's cache cleared", clear),
                      ("The same at load 12-14 (an earlier run)", busy),
