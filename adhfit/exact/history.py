@@ -166,14 +166,10 @@ def _case_one_end(stage, c, good, a_bad):
         pass
     except ConvergenceError:
         return
-    while hi - lo > 1e-10 * hi:
-        mid = 0.5 * (lo + hi)
-        try:
-            good, lo = stage.solve(mid, stage.x(good)), mid
-        except PastVertical:
-            hi = mid
-        except ConvergenceError:
-            return
+    found = _bisect_case_one(stage, good, lo, hi)
+    if found is None:
+        return
+    lo, good = found
     if c.control == "pressure":
         raise InputError("a_max", c.a_max, f"a number in [0.001, {lo:.6g}], the largest contact radius "
                          f"with a Case I exact membrane at d = {c.d:g}, lambda0 = {c.lambda0:g}",
@@ -185,6 +181,21 @@ def _case_one_end(stage, c, good, a_bad):
                       "lower a_max, or raise p",
                       {"control": c.control, "slip": c.slip, "p": c.p, "rs": c.rs, "lambda0": c.lambda0,
                        "a_max": c.a_max})
+
+
+def _bisect_case_one(stage, good, lo: float, hi: float):
+    """Bisect between the solved Case I state ``good`` (at ``lo``) and a parameter ``hi`` whose state turns
+    past vertical at the clamp, to 1e-10: ``(lo, good)`` at the limit, or None when a state between them
+    does not solve (the limit is then not shown)."""
+    while hi - lo > 1e-10 * hi:
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = stage.solve(mid, stage.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return None
+    return lo, good
 
 
 def _bracket(pin, c, m, top):
@@ -220,14 +231,10 @@ def _pinning_case_one_end(pin, c, good, alpha_good):
             return  # a Case I state past the stop: not its end
     if hi is None:
         return
-    while hi - lo > 1e-10 * hi:
-        mid = 0.5 * (lo + hi)
-        try:
-            good, lo = pin.solve(mid, pin.x(good)), mid
-        except PastVertical:
-            hi = mid
-        except ConvergenceError:
-            return
+    found = _bisect_case_one(pin, good, lo, hi)
+    if found is None:
+        return
+    lo, good = found
     raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp at alpha = "
                       f"{lo:.8g}, G = {good.G:.6g}, before G reaches w = {c.w:g} (the onset of "
                       "delamination; Case II beyond, outside the model)",
