@@ -67,6 +67,9 @@ class Chains:
         Accepted proposals over the whole run, tuning included (emcee's ``accepted``).
     random_states : list
         Each ensemble's final emcee random state (written with the chain, to resume it).
+    integrated : list of str
+        Coordinates integrated out analytically while sampling and drawn back from their conditional
+        posterior afterwards (:mod:`.linear`); empty when every coordinate was sampled.
     """
 
     chain: np.ndarray
@@ -85,6 +88,7 @@ class Chains:
     groups: list = field(default_factory=list)
     accepted_counts: np.ndarray | None = None
     random_states: list = field(default_factory=list)
+    integrated: list = field(default_factory=list)
 
     @property
     def kept(self) -> np.ndarray:

@@ -36,8 +36,9 @@ from ..selection import SCALE, evidence_word
 
 __all__ = ["sample", "DEFAULTS", "SERIES_DEFAULTS", "CI_METHOD", "REJECT_DBIC", "SHORT_RUN"]
 
-#: default run settings for one curve and its force (a 200-row curve, both slips: ~12,000 evaluations of
-#: ~0.3 ms); check_every = 5 steps is ~3 τ here, as emcee's own example checks every ~2.5 τ
+#: default run settings for one curve and its force (the 330-row sample curve, both slips, the zero and
+#: drift integrated out: ~9,500 evaluations of ~0.3 ms); check_every = 5 steps is ~3 τ here, as emcee's own
+#: example checks every ~2.5 τ
 DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "tune_rounds": 1, "check_every": 5,
             "max_steps": 300, "evidence_draws": 300, "predictive_draws": 60}
 #: several blocks (a series, or the contact radius): n_walkers is raised to 2·ndim, so two ensembles of
@@ -408,6 +409,10 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, stage, path, t_lsq,
         "short_runs": sorted(rejected),
         "likelihood": "every curve's force rows (and pull-off term) and each secondary observable's rows, one "
                       "sigma per block; row splits fixed at the least-squares optimum",
+        "linear_nuisances": "each curve's load-cell zero and drift enter its force linearly: they are integrated "
+                            "out analytically while sampling (flat priors, exact Gaussian integral) and drawn from "
+                            "their conditional posterior afterwards, so the chains hold every parameter "
+                            "(slips.*.integrated_out lists them); see adhfit.fitting.bayes.linear",
         "exact_membrane": "sampled through the large-stretch model plus the exact model's difference, linear "
                           "about the least-squares optimum, and checked on posterior draws against the exact "
                           "model (diagnostics.exact_stand_in: the log-likelihood ratio's spread and the largest "
@@ -416,6 +421,7 @@ def _summary(targets, chains, diags, evid, probs, cfg, seed, stage, path, t_lsq,
         "model_probabilities": probs,
         "slips": {s: {"parameters": targets[s].names, "diagnostics": diags[s], "evidence": evid[s].as_dict(),
                       "ensemble_seeds": chains[s].seeds, "chain_groups": chains[s].groups,
+                      "integrated_out": list(chains[s].integrated),
                       "mcmc_seconds": chains[s].wall_time, "posterior_evaluations": chains[s].n_evaluations}
                   for s in targets},
         "chain_file": str(path) if path is not None and any(c.groups for c in chains.values()) else None,
