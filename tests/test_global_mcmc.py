@@ -168,7 +168,7 @@ def test_global_mcmc_recovers_a_three_pressure_series():
     from adhfit.fitting.api import fit as fit_global
     series = _series(20261202, rows=160, pressures=(800.0, 1200.0, 1600.0))
     r = fit_global([c for c, _, _ in series], [s for _, s, _ in series], method="mcmc", seed=11,
-                   mcmc={"progress": False})
+                   progress=False)
     assert r.converged and r.slip["selected"] == "no-slip", (r.wall_time, {
         s: v["diagnostics"]["warnings"] for s, v in r.mcmc["slips"].items()})
     assert r.slip["probabilities"]["no-slip"] >= 0.95
