@@ -250,3 +250,31 @@ def test_two_processes_give_the_same_posterior(small_fit, tmp_path):
         from adhfit.fitting.bayes.mcmc import open_chain
         back = open_chain(two.mcmc["chain_file"], "frictionless/ensemble_1")
         np.testing.assert_array_equal(back.get_chain(), two.raw["frictionless"].chain[1])
+
+
+def test_default_tuning_rounds_converge_where_one_round_stuck():
+    """A 2 %-noise replicate of benchmarks/mcmc_linear_coverage.py (seed 20262228) on which one tuning round
+    left 14 walkers stuck (acceptance 0.06, τ ~17 steps, unconverged at the 300-step cap); the default
+    rounds (until the proposal settles) converge with τ < 5 steps."""
+    import sys  # noqa: PLC0415
+    from pathlib import Path  # noqa: PLC0415
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+    try:
+        from mcmc_linear_coverage import replicate  # noqa: PLC0415
+    finally:
+        sys.path.pop(0)
+    from adhfit.fitting import api  # noqa: PLC0415
+    seen = {}
+    fit = api.fit
+
+    def spy(*a, **k):
+        seen["r"] = fit(*a, **k)
+        return seen["r"]
+    api.fit = spy
+    try:
+        row = replicate((0.02, 20262228))
+    finally:
+        api.fit = fit
+    d = seen["r"].mcmc["slips"]["no-slip"]["diagnostics"]
+    assert row["converged"] and d["converged"], d["warnings"]
+    assert max(d["tau"].values()) < 5.0 and d["acceptance"]["mean"] > 0.3

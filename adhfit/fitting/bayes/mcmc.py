@@ -16,7 +16,7 @@ least-squares Laplace approximation with wide tails (5 degrees of freedom, stand
 then, once per ensemble, it is replaced by the best of four Student-t candidates (fitted to that
 ensemble's tuning samples, or the Laplace approximation; standard deviations × 1 or × 1.15; the one
 whose ln π - ln q varies least over the tuning samples, :func:`_tuned_proposal`) and frozen.  With
-``tune_rounds`` > 1 (a series fit) the tuning is repeated (:func:`_tune`): after each further round of
+``tune_rounds`` > 1 (the default) the tuning is repeated (:func:`_tune`): after each further round of
 ``tune_steps`` steps the proposal is refitted to the later half of the tuning samples (the previous
 fit being one more candidate), the walkers propose from it widened 1.5-fold during the next round,
 and tuning stops once the fit has settled (at least 3 rounds, at most ``tune_rounds``).  On a

@@ -38,8 +38,10 @@ __all__ = ["sample", "DEFAULTS", "SERIES_DEFAULTS", "CI_METHOD", "REJECT_DBIC", 
 
 #: default run settings for one curve and its force (the 330-row sample curve, both slips, the zero and
 #: drift integrated out: ~9,500 evaluations of ~0.3 ms); check_every = 5 steps is ~3 τ here, as emcee's own
-#: example checks every ~2.5 τ
-DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "tune_rounds": 1, "check_every": 5,
+#: example checks every ~2.5 τ.  Tuning: 3 to 6 rounds until the proposal settles: with one round 8 of 120
+#: replicate curves ended unconverged at the step cap (τ 6-19 steps, acceptance down to 0.06), with the rounds
+#: those curves converge at τ 1.3-3 (benchmarks/results/mcmc_linear_coverage.md)
+DEFAULTS = {"n_walkers": 8, "n_ensembles": 4, "tune_steps": 15, "tune_rounds": 6, "check_every": 5,
             "max_steps": 300, "evidence_draws": 300, "predictive_draws": 60}
 #: several blocks (a series, or the contact radius): n_walkers is raised to 2·ndim, so two ensembles of
 #: 16 walkers (three curves); the proposal is refitted after each of up to ``tune_rounds`` rounds until it
