@@ -89,7 +89,7 @@ def critical_value(n_free: int, sigma_given: bool, level: float = 0.95) -> float
     return float(stats.f.ppf(level, 1, max(n_free, 1)))
 
 
-def _subfit(residual, best, name, value, cov_shift, scale_covar):
+def _subfit(residual, best, name, value, cov_shift, scale_covar, realign=None):
     params = best.params.copy()
     for other, shift in cov_shift.items():
         p = params[other]
@@ -99,7 +99,15 @@ def _subfit(residual, best, name, value, cov_shift, scale_covar):
     if np.all(np.abs(residual(params)) >= PENALTY * 0.999):  # the warm start left the model's domain
         for other in cov_shift:
             params[other].value = best.params[other].value
-    return minimise(residual, params, scale_covar=scale_covar, max_nfev=200, tol=SUBFIT_TOL)
+    res = minimise(residual, params, scale_covar=scale_covar, max_nfev=200, tol=SUBFIT_TOL)
+    other = realign(res.params) if realign is not None else None
+    if other is not None:  # the sub-fit ended with the model's pull-off outside the data's gap: try it inside
+        alt = minimise(residual, other, scale_covar=scale_covar, max_nfev=200, tol=SUBFIT_TOL)
+        alt.nfev += res.nfev
+        if alt.chisqr < res.chisqr:
+            return alt
+        res.nfev = alt.nfev
+    return res
 
 
 def _outside(res) -> bool:
@@ -108,7 +116,7 @@ def _outside(res) -> bool:
     return r is not None and np.size(r) > 0 and bool(np.all(np.abs(r) >= PENALTY * 0.999))
 
 
-def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimit:
+def _side(residual, best, name, direction, crit, s2, scale_covar, realign=None) -> ProfileLimit:
     names = list(best.var_names)
     i = names.index(name)
     theta0 = best.params[name].value
@@ -123,7 +131,7 @@ def _side(residual, best, name, direction, crit, s2, scale_covar) -> ProfileLimi
     for k in range(MAX_SUBFITS):
         value = float(np.clip(theta0 + t, lo, hi))
         res = _subfit(residual, best, name, value, {o: s * (value - theta0) for o, s in slopes.items()},
-                      scale_covar)
+                      scale_covar, realign)
         nfev += res.nfev
         if _outside(res):  # beyond the model's domain: the limit, if any, lies closer
             hit_domain = True
@@ -167,7 +175,7 @@ def _next_step(tried, direction, se):
 
 
 def profile_interval(residual, best, name: str, *, sigma_given: bool, level: float = 0.95,
-                     s2_floor: float = 0.0) -> tuple[ProfileLimit, ProfileLimit]:
+                     s2_floor: float = 0.0, realign=None) -> tuple[ProfileLimit, ProfileLimit]:
     """Lower and upper 95 % profile limits of internal parameter ``name`` of an lmfit result.
 
     Parameters
@@ -185,19 +193,23 @@ def profile_interval(residual, best, name: str, *, sigma_given: bool, level: flo
     s2_floor : float
         Least residual variance (residual units) D is measured in when σ is estimated: the model's own
         numerical precision, under which noise-free data's χ² is interpolation roughness.
+    realign : callable, optional
+        Sub-fit parameters -> a second start (lmfit Parameters), or ``None`` when none is needed: χ² jumps
+        where the model's pull-off crosses a row, and a sub-fit started on the wrong side of such a jump
+        stays there (:func:`.intervals.gap_start`).
     """
     n_free = int(best.ndata - best.nvarys)
     crit = critical_value(n_free, sigma_given, level)
     s2 = 1.0 if sigma_given else max(best.chisqr / max(n_free, 1), s2_floor)
-    return (_side(residual, best, name, -1.0, crit, s2, not sigma_given),
-            _side(residual, best, name, +1.0, crit, s2, not sigma_given))
+    return (_side(residual, best, name, -1.0, crit, s2, not sigma_given, realign),
+            _side(residual, best, name, +1.0, crit, s2, not sigma_given, realign))
 
 
 def one_side(residual, best, name: str, direction: float, *, sigma_given: bool,
-             level: float = 0.90, s2_floor: float = 0.0) -> ProfileLimit:
-    """One profile limit at a two-sided ``level`` (0.90: a one-sided 95 % bound); ``s2_floor`` as for
-    :func:`profile_interval`."""
+             level: float = 0.90, s2_floor: float = 0.0, realign=None) -> ProfileLimit:
+    """One profile limit at a two-sided ``level`` (0.90: a one-sided 95 % bound); ``s2_floor`` and
+    ``realign`` as for :func:`profile_interval`."""
     n_free = int(best.ndata - best.nvarys)
     crit = critical_value(n_free, sigma_given, level)
     s2 = 1.0 if sigma_given else max(best.chisqr / max(n_free, 1), s2_floor)
-    return _side(residual, best, name, direction, crit, s2, not sigma_given)
+    return _side(residual, best, name, direction, crit, s2, not sigma_given, realign)
