@@ -248,7 +248,8 @@ def run_dask_batch(n: int, n_workers: int, extra: list[str], time_limit: float, 
             "second_half_growth_mib": growth, "bounded_mib": BOUNDED_MIB,
             "bounded": growth is not None and max(growth) <= BOUNDED_MIB,
             "nproc": os.cpu_count(), "python": platform.python_version(), "adhfit_revision": revision,
-            "last_lines": text.strip().splitlines()[-3:]}
+            "last_lines": text.strip().splitlines()[-3:],
+            "notes": [line for line in text.splitlines() if line.startswith("adhfit:")]}
 
 
 def _rss(p) -> float | None:
@@ -313,7 +314,15 @@ Resident memory (MiB) against the curves done (the first sample once each tenth 
 
 The progress display is the command's own: one `[k/N] file` line on standard error per finished curve.
 Last lines: {' / '.join('`' + line + '`' for line in r['last_lines'])}
-"""
+{_notes_text(r)}"""
+
+
+def _notes_text(r: dict) -> str:
+    notes = r.get("notes")
+    if notes is None:
+        return ""
+    return ("\nThe command's notes on standard error: " + (" / ".join(f"`{n}`" for n in notes) if notes else "none")
+            + ".\n")
 
 
 def main(argv: list[str] | None = None) -> None:
