@@ -20,19 +20,24 @@ Writes ``benchmarks/results/batch.md`` and ``benchmarks/results/batch.json``.
 
 A long batch on a local Dask cluster (memory, not speed)::
 
-    python benchmarks/bench_batch.py --dask 1000 [--dask-workers 2] [--time-limit 2400] [-- FIT OPTIONS]
+    python benchmarks/bench_batch.py --dask 1000 [--dask-workers 2] [--time-limit 2400] [--dask-profiler]
+                                     [-- FIT OPTIONS]
 
 makes ``--dask`` small synthetic curves (``adhfit simulate --scene`` of the sample's displacement-control
 scene, 60 rows, 0.5 % noise, W_ad, μh and the slip condition varied, one seed each; run in one process),
-starts a ``distributed.LocalCluster`` (``--dask-workers`` processes, one thread each), and runs::
+starts a ``distributed.LocalCluster`` (``--dask-workers`` processes, one thread each; Dask's statistical
+profiler off in the workers, as docs/contracts.md A7 advises for long batches, unless ``--dask-profiler``),
+and runs::
 
     python -m adhfit.cli fit DATA --scheduler ADDRESS -o OUT
 
 with the default fit options (or those after ``--``), sampling every second the resident memory (RSS)
 of each Dask worker, of the command and of the scheduler (this process), and the curves done (the
-command's ``[k/N]`` progress lines).  After ``--time-limit`` seconds the command gets a Ctrl-C (it then
+command's ``[k/N]`` progress lines).  The result says how much each worker's RSS grew over the second
+half of the curves (:data:`BOUNDED_MIB` or less: bounded).  After ``--time-limit`` seconds the command gets a Ctrl-C (it then
 writes the summary of what finished), and the result says how many curves were fitted.  Writes
-``benchmarks/results/batch_dask.md`` and ``benchmarks/results/batch_dask.json``.
+``benchmarks/results/batch_dask.md`` and ``benchmarks/results/batch_dask.json`` (``batch_dask_profiler.*``
+with ``--dask-profiler``).
 """
 from __future__ import annotations
 
@@ -151,10 +156,34 @@ def make_synthetic(data: Path, n: int) -> Path:
     return data
 
 
-def run_dask_batch(n: int, n_workers: int, extra: list[str], time_limit: float, argv: list[str]) -> dict:
+#: a worker's RSS may grow by this much (MiB) over the second half of the curves and still count as bounded
+#: (the run-to-run wobble of a worker's RSS between curves is ~15 MiB; Dask's profiler added ~1 MiB per second)
+BOUNDED_MIB = 30.0
+#: Dask's statistical profiler in the workers (distributed.worker.profile.enabled), as an environment variable
+PROFILER_ENV = "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED"
+
+
+def _worker_profile(dask_worker) -> dict:
+    """Whether a Dask worker runs its statistical profiler, and how much profile it holds (cycles, nodes)."""
+    import dask  # noqa: PLC0415
+
+    def nodes(tree: dict) -> int:
+        return 1 + sum(nodes(c) for c in tree.get("children", {}).values())
+    history = list(getattr(dask_worker, "profile_history", ()))
+    return {"enabled": bool(dask.config.get("distributed.worker.profile.enabled")), "cycles": len(history),
+            "nodes": sum(nodes(tree) for _, tree in history)}
+
+
+def run_dask_batch(n: int, n_workers: int, extra: list[str], time_limit: float, argv: list[str],
+                   profiler: bool = False) -> dict:
     import psutil  # noqa: PLC0415
     import signal  # noqa: PLC0415
+    revision = _revision()  # what runs, before anything else can change
+    if not profiler:  # the workers are processes started from this one: they inherit its environment
+        os.environ[PROFILER_ENV] = "False"
+    import dask  # noqa: PLC0415
     from distributed import Client, LocalCluster  # noqa: PLC0415
+    dask.config.refresh()
     me = psutil.Process()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -167,6 +196,9 @@ def run_dask_batch(n: int, n_workers: int, extra: list[str], time_limit: float, 
                 Client(cl.scheduler_address) as client:
             pids = client.run(os.getpid)
             workers = {addr: psutil.Process(pid) for addr, pid in pids.items()}
+            profile_on = sorted({p["enabled"] for p in client.run(_worker_profile).values()})
+            if profile_on != [profiler]:
+                raise SystemExit(f"the workers' profiler is {profile_on}, not {profiler} as asked")
             limit = cl.workers[next(iter(cl.workers))].memory_manager.memory_limit if cl.workers else None
             cmd = [sys.executable, "-m", "adhfit.cli", "fit", str(data), "--scheduler", cl.scheduler_address,
                    "-o", str(tmp / "out"), *extra]
@@ -194,12 +226,17 @@ def run_dask_batch(n: int, n_workers: int, extra: list[str], time_limit: float, 
                     time.sleep(1.0)
             wall = time.perf_counter() - t1
             worker_cpu = [sum(p.cpu_times()[:2]) for p in workers.values()]
+            profiles = [client.run(_worker_profile).get(addr) for addr in workers]
         load1 = os.getloadavg()
         text = err_path.read_text(errors="replace")
         done = sum(1 for line in text.splitlines() if line.startswith("["))
         rows = list(csv.DictReader((tmp / "out" / "summary.csv").open(newline="", encoding="utf-8")))
         ok = sum(1 for r in rows if r["status"] == "ok")
     peak = [max(s["workers_mib"][i] for s in samples if s["workers_mib"][i] is not None) for i in range(n_workers)]
+    half = next((s for s in samples if s["done"] >= n // 2), None)
+    end = next((s for s in samples if s["done"] >= n), samples[-1] if samples else None)
+    growth = None if half is None or end is None else \
+        [round(b - a, 1) for a, b in zip(half["workers_mib"], end["workers_mib"]) if a is not None and b is not None]
     return {"command": " ".join(["python benchmarks/bench_batch.py", *argv]), "curves": n, "dask_workers": n_workers,
             "fit_options": extra, "curves_made_s": made, "wall_s": wall, "time_limit_s": time_limit,
             "interrupted_at_time_limit": interrupted, "reported": done, "fitted_ok": ok, "summary_rows": len(rows),
@@ -207,8 +244,12 @@ def run_dask_batch(n: int, n_workers: int, extra: list[str], time_limit: float, 
             "peak_worker_rss_mib": peak, "peak_cli_rss_mib": max(s["cli_mib"] or 0 for s in samples),
             "peak_scheduler_rss_mib": max(s["scheduler_mib"] or 0 for s in samples),
             "rss_by_progress": _by_progress(samples, n), "load_average_start": load0, "load_average_end": load1,
-            "nproc": os.cpu_count(), "python": platform.python_version(), "adhfit_revision": _revision(),
-            "last_lines": text.strip().splitlines()[-3:]}
+            "worker_profiler": profiler, "worker_profiles_at_end": profiles,
+            "second_half_growth_mib": growth, "bounded_mib": BOUNDED_MIB,
+            "bounded": growth is not None and max(growth) <= BOUNDED_MIB,
+            "nproc": os.cpu_count(), "python": platform.python_version(), "adhfit_revision": revision,
+            "last_lines": text.strip().splitlines()[-3:],
+            "notes": [line for line in text.splitlines() if line.startswith("adhfit:")]}
 
 
 def _rss(p) -> float | None:
@@ -237,6 +278,14 @@ def _dask_markdown(r: dict) -> str:
     stop = (f"stopped by a Ctrl-C at the time limit ({r['time_limit_s']:.0f} s) after **{r['reported']} of "
             f"{r['curves']} curves**" if r["interrupted_at_time_limit"] else f"all {r['curves']} curves reported")
     limit = r["worker_memory_limit_bytes"]
+    prof = ("on (Dask's default)" if r.get("worker_profiler") else
+            f"off (`{PROFILER_ENV}=False` in the workers' environment, as docs/contracts.md A7 advises)")
+    held = "; ".join(f"{p['cycles']} cycles, {p['nodes']} nodes" for p in r.get("worker_profiles_at_end") or [] if p)
+    growth = r.get("second_half_growth_mib")
+    verdict = ("not measured (the second half did not finish)" if growth is None else
+               f"{', '.join(f'{g:+.1f}' for g in growth)} MiB per worker: "
+               + ("**bounded**" if r["bounded"] else "**not bounded**")
+               + f" (bounded here means at most {r['bounded_mib']:.0f} MiB)")
     return f"""# Batch of {r['curves']} curves on a local Dask cluster: memory
 
 Command: `{r['command']}`  
@@ -245,7 +294,7 @@ Machine: python {r['python']}, nproc {r['nproc']}, adhfit revision {r['adhfit_re
 {', '.join(f'{x:.2f}' for x in r['load_average_end'])} (the machine is shared by four engineers).  
 {r['curves']} synthetic curves (`adhfit simulate --scene`, 60 rows, 0.5 % noise; made in {r['curves_made_s']:.0f} s),
 `distributed.LocalCluster` of {r['dask_workers']} worker processes with one thread each (memory limit per
-worker {limit / 2**30 if limit else float('nan'):.1f} GiB, Dask's default), then
+worker {limit / 2**30 if limit else float('nan'):.1f} GiB, Dask's default; statistical profiler {prof}), then
 `python -m adhfit.cli fit DATA --scheduler ADDRESS -o OUT`, fit options: {opts}.
 
 Result: {stop}; {r['fitted_ok']} fitted (`status` ok), summary.csv with {r['summary_rows']} rows, exit status
@@ -253,6 +302,9 @@ Result: {stop}; {r['fitted_ok']} fitted (`status` ok), summary.csv with {r['summ
 
 **Peak RSS per worker: {', '.join(f'{m:.0f}' for m in r['peak_worker_rss_mib'])} MiB**; the command (client):
 {r['peak_cli_rss_mib']:.0f} MiB; the scheduler (the benchmark's process): {r['peak_scheduler_rss_mib']:.0f} MiB.
+
+Growth of each worker's RSS over the second half of the curves (from the first sample with {r['curves'] // 2}
+done to the first with {r['curves']} done): {verdict}.  Profile held by each worker at the end: {held or 'not asked'}.
 
 Resident memory (MiB) against the curves done (the first sample once each tenth was reached):
 
@@ -262,7 +314,15 @@ Resident memory (MiB) against the curves done (the first sample once each tenth 
 
 The progress display is the command's own: one `[k/N] file` line on standard error per finished curve.
 Last lines: {' / '.join('`' + line + '`' for line in r['last_lines'])}
-"""
+{_notes_text(r)}"""
+
+
+def _notes_text(r: dict) -> str:
+    notes = r.get("notes")
+    if notes is None:
+        return ""
+    return ("\nThe command's notes on standard error: " + (" / ".join(f"`{n}`" for n in notes) if notes else "none")
+            + ".\n")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -276,12 +336,15 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--dask", type=int, default=None, metavar="CURVES", help="a long batch on a local Dask cluster")
     ap.add_argument("--dask-workers", type=int, default=2)
     ap.add_argument("--time-limit", type=float, default=2400.0)
+    ap.add_argument("--dask-profiler", action="store_true",
+                    help="keep Dask's statistical profiler on in the workers (its default; ~1 MiB per second each)")
     args = ap.parse_args(own)
     if args.dask is not None:
-        result = run_dask_batch(args.dask, args.dask_workers, extra, args.time_limit, argv)
+        result = run_dask_batch(args.dask, args.dask_workers, extra, args.time_limit, argv, args.dask_profiler)
         RESULTS.mkdir(parents=True, exist_ok=True)
-        (RESULTS / "batch_dask.json").write_text(json.dumps(result, indent=2) + "\n")
-        (RESULTS / "batch_dask.md").write_text(_dask_markdown(result))
+        name = "batch_dask_profiler" if args.dask_profiler else "batch_dask"
+        (RESULTS / f"{name}.json").write_text(json.dumps(result, indent=2) + "\n")
+        (RESULTS / f"{name}.md").write_text(_dask_markdown(result))
         print(_dask_markdown(result))
         return
     n_curves = args.curves

@@ -22,7 +22,9 @@ Outputs (batch)
 
 Who runs the curves
     ``--workers N``: N local processes (default: one per core); ``--scheduler ADDRESS``: the workers of a
-    Dask distributed cluster (``pip install 'adhfit[dask]'``; paths must be reachable from the workers).
+    Dask distributed cluster (``pip install 'adhfit[dask]'``; paths must be reachable from the workers;
+    for long batches, workers started without Dask's statistical profiler, which otherwise holds ~1 MiB
+    per second of fitting: docs/contracts.md A7, :func:`.runners.profiling_workers`).
     Each job (:func:`run_job`: curve, scene, options) fits one curve, writes its reports and returns its
     summary row; the rows are put back in job order, so ``summary.csv`` is the same whichever runs it
     (only ``wall_time_s``, a measurement, changes from run to run).  One failing curve never stops the

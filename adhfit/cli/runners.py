@@ -25,7 +25,8 @@ from typing import Any, Callable, Sequence
 
 from ..errors import InputError
 
-__all__ = ["default_workers", "run_local", "run_dask", "forks_here", "parent_death_signal", "WATCHDOG_PERIOD_S"]
+__all__ = ["default_workers", "run_local", "run_dask", "forks_here", "parent_death_signal", "WATCHDOG_PERIOD_S",
+           "profiling_workers", "PROFILER_NOTE"]
 
 #: how long to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = "10s"
@@ -197,7 +198,9 @@ def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report,
     worker thread, at least :data:`DASK_WINDOW_MIN`); the next is submitted as one finishes, and a
     finished job's result is released once reported.  So the scheduler, the workers and this process
     hold a bounded number of jobs and results whatever the length of the batch (a batch of 1,000 curves
-    costs what one of a few dozen does: ``benchmarks/results/batch_dask.md``).
+    costs what one of a few dozen does: ``benchmarks/results/batch_dask.md``).  Workers that run Dask's
+    statistical profiler hold ~1 MiB per second of fitting on top (:func:`profiling_workers`): the
+    command says so once, on standard error.
 
     Raises
     ------
@@ -215,6 +218,9 @@ def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report,
                          "tcp://127.0.0.1:8786", reason=f"({' '.join(str(err).split())})") from None
     if window is None:
         window = max(DASK_WINDOW_MIN, DASK_WINDOW_PER_THREAD * _dask_threads(client))
+    profiling = profiling_workers(client)
+    if profiling:
+        print(PROFILER_NOTE.format(n=profiling), file=sys.stderr, flush=True)
     running: dict = {}  # future -> index of its call
     try:
         queue = iter(range(len(calls)))
@@ -250,6 +256,32 @@ def run_dask(fn: Callable, calls: Sequence[tuple], address: str, report: Report,
 DASK_WINDOW_PER_THREAD = 4
 #: ... and at least this many
 DASK_WINDOW_MIN = 8
+
+
+#: said once on standard error when the cluster's workers run Dask's statistical profiler (issue 21)
+PROFILER_NOTE = ("adhfit: {n} Dask worker(s) run the statistical profiler, which keeps ~1 MiB of profile per "
+                 "second of fitting for its last 1,000 s; for long batches start them with "
+                 "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False (docs/contracts.md A7)")
+
+
+def _runs_profiler(dask_worker) -> bool:
+    """Run on a Dask worker: whether its statistical profiler samples the running tasks."""
+    return "profile" in getattr(dask_worker, "periodic_callbacks", {})
+
+
+def profiling_workers(client) -> int:
+    """How many of the cluster's workers run Dask's statistical profiler (0 where it cannot be asked).
+
+    The profiler samples every running task's stack each 10 ms and keeps one tree of the sampled frames
+    per second, twice (``profile_history`` and ``profile_keys_history``), for the last
+    ``distributed.admin.low-level-log-length`` (1,000) seconds.  A fit's stacks are deep and varied: a
+    worker's memory grows by ~1 MiB per second of fitting until that history is full
+    (benchmarks/results/batch_dask_before.md), and is flat with the profiler off (batch_dask.md).
+    """
+    try:
+        return sum(1 for on in client.run(_runs_profiler).values() if on)
+    except Exception:  # noqa: BLE001 - an older distributed, or a worker that cannot be asked: say nothing
+        return 0
 
 
 def _dask_threads(client) -> int:
