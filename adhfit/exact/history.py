@@ -10,6 +10,7 @@ from ..errors import ConvergenceError, DomainError, InputError
 from ..histories import History
 from .control import Control, prepare
 from .march import PREDICT, vertex
+from . import kernels as K
 from .stages import PastVertical, Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
@@ -207,11 +208,8 @@ def _bracket(pin, c, m, top):
     prev = m if prev is None else prev
     if st is None:
         _pinning_case_one_end(pin, c, prev, prev_a)
-        raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
-                               "(the clamp turning past vertical, or the contact region going slack: "
-                               "stretch -> 1, outside a membrane model)",
-                               {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
-    return prev, prev_a, st, alpha
+        return _bracket_in_control(c, m, prev)
+    return prev, prev_a, st, alpha, None
 
 
 def _pinning_case_one_end(pin, c, good, alpha_good):
@@ -245,30 +243,168 @@ def _pinning_case_one_end(pin, c, good, alpha_good):
 
 
 def _onset(cfg, c, m):
-    """Bracket G = w along pinning (``_bracket``), then solve it."""
+    """Bracket G = w along pinning (``_bracket``), then solve it. Returns (onset, the stage the pinning
+    rows are marched in, the onset's value of its parameter)."""
     pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
     top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
-    prev, prev_a, st, alpha = _bracket(pin, c, m, top)
+    prev, prev_a, st, alpha, ctl = _bracket(pin, c, m, top)
     on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     t = (c.w - prev.G) / (st.G - prev.G)
     guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
-    guess = guess[:1] + [prev_a + t * (alpha - prev_a)] + guess[1:]
+    guess = guess[:1] + [prev.alpha + t * (st.alpha - prev.alpha)] + guess[1:]
+    stage, par = (pin, lambda s: s.alpha) if ctl is None else (ctl, _control_value(c))
     try:
-        return on_stage.solve(c.w, guess), pin
+        on = on_stage.solve(c.w, guess)
     except ConvergenceError:
         try:
-            a_on = brentq(lambda a: pin.solve(a, pin.x(prev)).G - c.w, prev_a, alpha, xtol=1e-14)
-        except ValueError as exc:
+            v_on = brentq(lambda v: stage.solve(v, stage.x(prev)).G - c.w, par(prev), par(st), xtol=1e-14)
+        except (ValueError, ConvergenceError) as exc:
             raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": alpha}) from exc
-        st = pin.solve(a_on, pin.x(prev))
-        return on_stage.solve(c.w, pin.x(st)[:1] + [a_on] + pin.x(st)[1:]), pin
+        s_on = stage.solve(v_on, stage.x(prev))
+        on = on_stage.solve(c.w, pin.x(s_on)[:1] + [s_on.alpha] + pin.x(s_on)[1:])
+    return on, stage, par(on)
 
 
 def _pinning(cfg, c, m):
-    on, pin = _onset(cfg, c, m)
+    on, stage, v_on = _onset(cfg, c, m)
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))
-    states = march(pin, u[:-1] * on.alpha, pin.x(m)) if c.n_pin > 2 else []
+    v_m = 0.0 if stage.param == "alpha" else _control_value(c)(m)
+    x_m = stage.x(m) if stage.param == "alpha" else stage.x(m)[:1] + [0.0]
+    states = march(stage, v_m + u[:-1] * (v_on - v_m), x_m) if c.n_pin > 2 else []
     return states + [on], on
+
+
+def _control_value(c):
+    """The control variable of a state: the gap d under displacement control, p under pressure control."""
+    return (lambda s: s.d) if c.control == "displacement" else (lambda s: s.p)
+
+
+def _control_stage(cfg, c, m) -> Stage:
+    """Pinning parameterized by the control variable (d, or p under pressure control) with the contact
+    angle among the unknowns: it follows the branch through a fold in alpha (alpha rising to a maximum
+    and falling again while d keeps rising and G keeps growing), which a march in alpha cannot pass."""
+    fx = {"rho_a": m.rho_a}
+    if c.slip == "frictionless":
+        edge, unk = "frictionless", ("lc", "alpha")
+    else:
+        edge, unk = "given", ("l1p", "alpha")
+        fx["lc"] = m.lc
+    if c.control == "displacement":
+        return Stage(cfg, edge, {**fx, "p": c.p}, unk, ("clamp", "d"), {"d": m.d}, "d")
+    return Stage(cfg, edge, {**fx, "p": m.p}, unk, ("clamp", "d"), {"d": c.d}, "p")
+
+
+def _outside(c, st) -> str | None:
+    """Why a solved Case I state is outside the membrane model, or None: a line tension at the contact
+    edge (either side: the contact region's least tension is at its edge) that is not positive (the
+    membrane slack or in compression: it would wrinkle), or a contact edge at or past the equator of
+    the sphere (a >= rs: the membrane would wrap under it)."""
+    if st.rho_a > 0.0 and c.crv > 0.0 and not st.a * c.crv < 1.0 - 1e-9:  # the field sticks at r = rs
+        return "equator"
+    t = min(min(K.tensions(st.l1m, st.l2a)), min(K.tensions(st.l1p, st.l2a)))
+    return None if t > 0.0 else "slack"
+
+
+def _bracket_in_control(c, m, prev):
+    """The alpha march of pinning stopped at ``prev`` before G reached w: continue the branch in the
+    control variable (``_control_stage``) until G >= w (returns the bracket as ``_bracket``), or prove
+    where it ends before that: the clamp turning past vertical, a line tension at the contact edge
+    reaching 0 (frictionless pinning: T1- = T1+ cos(alpha) -> 0 as alpha -> pi/2; or a compressive
+    hoop tension), or the contact edge reaching the sphere's equator. Each is bisected between solved
+    states in the control to 1e-10 and raised as a DomainError; a continuation that stalls anywhere
+    else is a ConvergenceError."""
+    cfg = Config(c.lambda0, c.crv, c.n)
+    ctl = _control_stage(cfg, c, m)
+    val = _control_value(c)
+    v0, v1 = val(m), val(prev)
+    sgn = math.copysign(1.0, v1 - v0) if v1 != v0 else (1.0 if c.control == "displacement" else -1.0)
+    h = max(abs(v1 - v0) / 20.0, 1e-4)
+    good = prev  # solved (in alpha): the same equations
+    vs, xs = [v1], [ctl.x(prev)[:1] + [prev.alpha]]
+    for _ in range(2000):
+        v = vs[-1] + sgn * h
+        why = None
+        try:
+            st = ctl.solve(v, _predict(v, vs[-3:], xs[-3:], xs[-1]))
+            why = _outside(c, st)
+        except PastVertical:
+            why = "vertical"
+        except ConvergenceError:
+            h *= 0.5
+            if h < 1e-10 * (1.0 + abs(vs[-1])):
+                break
+            continue
+        if why is not None:
+            _control_end(ctl, c, good, vs[-1], v, why)  # raises when the end is shown
+            h *= 0.5
+            if h < 1e-10 * (1.0 + abs(vs[-1])):
+                break
+            continue
+        if st.G >= c.w:
+            return good, good.alpha, st, st.alpha, ctl
+        good = st
+        vs.append(v)
+        xs.append(ctl.x(st))
+        h *= 1.5
+    last = good
+    if c.slip == "frictionless" and last.alpha > 0.5 * math.pi - 1e-5:
+        t = min(K.tensions(last.l1m, last.l2a))
+        raise DomainError(f"the exact pinning branch (frictionless) {_END_WORDS['slack']} as alpha -> pi/2 "
+                          f"(T1- = T1+ cos(alpha)), before G reaches w = {c.w:g}",
+                          f"the branch stalls at alpha = {last.alpha:.10g} (pi/2 - {0.5 * math.pi - last.alpha:.2g}), "
+                          f"least edge tension {t:.3g}, G = {last.G:.6g} < w",
+                          "lower w, or change the loading end",
+                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                           "a_max": c.a_max})
+    if c.crv > 0.0 and last.a * c.crv > 1.0 - 1e-4:
+        raise DomainError(f"the exact pinning branch ({c.slip}) carries the contact edge to the sphere's "
+                          f"equator (a = rs) before G reaches w = {c.w:g}: wrapping past it is outside the "
+                          "model", f"the branch stalls at a = {last.a:.8g} (rs = {c.rs:.8g}, "
+                          f"{c.control} control at {val(last):.8g}) with G = {last.G:.6g} < w",
+                          "lower w, or change the loading end",
+                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                           "a_max": c.a_max, "rs": c.rs})
+    raise ConvergenceError("exact pinning: G does not reach w before the pinning branch (continued in "
+                           "the control variable) stalls",
+                           {"w": c.w, "alpha": last.alpha, "G": last.G, "lc": last.lc, "lambda0": c.lambda0})
+
+
+_END_WORDS = {
+    "vertical": "turns past vertical at the clamp (Case II beyond, outside the model)",
+    "slack": "has a line tension at the contact edge fall to 0 (the membrane going slack, or into "
+             "compression, where it would wrinkle: outside a membrane model)",
+    "equator": "carries the contact edge to the sphere's equator (a = rs: wrapping past it is outside "
+               "the model)"}
+
+
+def _control_end(ctl, c, good, v_good, v_bad, why):
+    """Bisect in the control between the valid state ``good`` (at ``v_good``) and ``v_bad`` whose state is
+    outside the model for the reason ``why``; raise the end as a DomainError when every state between
+    solves (returns otherwise: not shown)."""
+    lo, hi = v_good, v_bad
+    while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
+        mid = 0.5 * (lo + hi)
+        try:
+            st = ctl.solve(mid, ctl.x(good))
+            bad = _outside(c, st)
+        except PastVertical:
+            bad = "vertical"
+        except ConvergenceError:
+            return
+        if bad is None:
+            good, lo = st, mid
+        elif bad == why:
+            hi = mid
+        else:
+            return
+    name = "d" if c.control == "displacement" else "p"
+    raise DomainError(f"the exact pinning branch ({c.slip}) {_END_WORDS[why]} at {name} = {lo:.10g} "
+                      f"(alpha = {good.alpha:.8g}, a = {good.a:.6g}), before G reaches w = {c.w:g}: "
+                      f"G = {good.G:.6g} there (the onset of delamination)",
+                      f"solved states either side of it, to 1e-10 in {name}",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": lo})
 
 
 def _delamination(cfg, c, m, on):
@@ -315,10 +451,65 @@ def _finish(stage, states, rho, c, no_slip):
     if no_slip and more and more[-1].alpha < 0.2:  # the branch end, reached on the finer grid
         return states + kept + ([] if kept and kept[-1] is more[-1] else [more[-1]])
     last = (more or states)[-1]
+    _check_membrane(c, [("delamination", s) for s in states + more])  # e.g. the edge stuck at the equator
+    _delamination_end(stage, c, last, rest[len(more)])
+    if c.crv > 0.0 and last.a * c.crv > 1.0 - 1e-4:
+        raise DomainError(f"the exact delamination branch ({c.slip}) carries the contact edge to the sphere's "
+                          "equator (a = rs: wrapping past it is outside the model) before detachment",
+                          f"the march stalls at a = {last.a:.8g} (a/rs = {last.a * c.crv:.8g}), alpha = "
+                          f"{last.alpha:.6g}, on the history's grid and on one four times finer",
+                          "lower w, or change the loading end",
+                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                           "a_max": c.a_max, "rs": c.rs})
     raise ConvergenceError(f"exact delamination ({c.slip}): the march stopped at a = {last.a:.6g} "
                            f"(alpha = {last.alpha:.4g}) before detachment, on the history's grid and "
                            "on one four times finer",
                            {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max, "control": c.control})
+
+
+def _delamination_end(stage, c, good, v_bad):
+    """The delamination march stopped after the solved state ``good``: when the state at ``v_bad`` (the
+    next rho_a) solves and turns past vertical at the clamp, bisect in rho_a between solved states for
+    the Case I limit and raise it as a DomainError. Returns when not shown."""
+    try:
+        stage.solve(v_bad, stage.x(good))
+        return
+    except PastVertical:
+        pass
+    except ConvergenceError:
+        return
+    lo, hi = good.rho_a, v_bad
+    while abs(hi - lo) > 1e-10 * abs(lo):
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = stage.solve(mid, stage.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return
+    raise DomainError(f"the exact delamination branch ({c.slip}) turns past vertical at the clamp at a = "
+                      f"{good.a:.8g} (alpha = {good.alpha:.6g}, d = {good.d:.8g}), before detachment (Case II "
+                      "beyond, outside the model)",
+                      "solved states either side of it, to 1e-10 in the edge's material coordinate",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": good.a})
+
+
+def _check_membrane(c, rows):
+    """Every solved state of the history must be one the membrane model represents (``_outside``):
+    positive line tensions at the contact edge and a contact edge below the sphere's equator. The
+    first that is not is raised as a DomainError (the state itself shows it)."""
+    for stage, st in rows:
+        why = _outside(c, st) if st.rho_a > 0.0 else None
+        if why is not None:
+            t = min(min(K.tensions(st.l1m, st.l2a)), min(K.tensions(st.l1p, st.l2a)))
+            raise DomainError(f"a {stage} state of the exact membrane {_END_WORDS[why]}",
+                              f"at a = {st.a:.8g} (a/rs = {st.a * c.crv:.10g}), alpha = {st.alpha:.6g}: "
+                              f"least edge tension {t:.3g}",
+                              "lower w, or change the loading end",
+                              {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                               "a_max": c.a_max, "rs": c.rs})
 
 
 def _vertex(x, y, c, h):
@@ -426,6 +617,8 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     pin, on = _pinning(cfg, c, m)
     _check_compressive(c, mc, m)
     dl, stage, ends_at = _delamination(cfg, c, m, on)
+    _check_membrane(c, [("making_contact", s) for s in mc[1:]] + [("pinning", s) for s in pin] +
+                    [("delamination", s) for s in dl])
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
     turn = _first_turn(stage, m, pin, dl, key, sign)

@@ -89,7 +89,7 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
         status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol,
                                                   max_iter, cache)
         total += shots
-        if status != N.OK or not o[2] < 0.5 * math.pi:
+        if status != N.OK or not abs(o[2]) < 0.5 * math.pi:
             return i, rows, J, total
         vs[h + i] = abscissa(v, scale)
         xs[h + i] = x
@@ -168,7 +168,7 @@ def bracket_rows(edge, crv, beta, n, vals, unk, res, tg, pidx, x_m, g_m, w, top,
         status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, v, unk, res, tg,
                                                   predict(alpha, vs, xs, cnt, x_m), J, tol, max_iter, cache)
         total += shots
-        if status != N.OK or not o[2] < 0.5 * math.pi or (step > 0.04 and o[5] < prev_g):
+        if status != N.OK or not abs(o[2]) < 0.5 * math.pi or (step > 0.04 and o[5] < prev_g):
             step, grow = 0.5 * step, False
             continue
         row[:k] = x
