@@ -243,35 +243,106 @@ def _pinning_case_one_end(pin, c, good, alpha_good):
 
 
 def _onset(cfg, c, m):
-    """Bracket G = w along pinning (``_bracket``), then solve it. Returns (onset, the stage the pinning
-    rows are marched in, the onset's value of its parameter)."""
+    """Bracket G = w along pinning (``_bracket``), then solve it. Returns (onset, the pinning stage in
+    alpha, the stage in the control that continued it or None, the state where the march in alpha
+    handed over to it)."""
     pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
     top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
     prev, prev_a, st, alpha, ctl = _bracket(pin, c, m, top)
+    turn = None
+    if ctl is not None:
+        ctl, turn = ctl
     on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     t = (c.w - prev.G) / (st.G - prev.G)
     guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
     guess = guess[:1] + [prev.alpha + t * (st.alpha - prev.alpha)] + guess[1:]
-    stage, par = (pin, lambda s: s.alpha) if ctl is None else (ctl, _control_value(c))
     try:
         on = on_stage.solve(c.w, guess)
     except ConvergenceError:
-        try:
-            v_on = brentq(lambda v: stage.solve(v, stage.x(prev)).G - c.w, par(prev), par(st), xtol=1e-14)
-        except (ValueError, ConvergenceError) as exc:
-            raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": alpha}) from exc
-        s_on = stage.solve(v_on, stage.x(prev))
-        on = on_stage.solve(c.w, pin.x(s_on)[:1] + [s_on.alpha] + pin.x(s_on)[1:])
-    return on, stage, par(on)
+        stage, par = (pin, lambda s: s.alpha) if ctl is None else (ctl, _control_value(c))
+        on = _onset_between(stage, par, on_stage, pin, c, prev, st)
+    return on, pin, ctl, turn
+
+
+def _onset_between(stage, par, on_stage, pin, c, prev, st):
+    """The onset between the pinning states ``prev`` (G < w) and ``st`` (G >= w) when Newton on it from
+    their interpolation failed: march the stage across the bracket on 8 steps, then Brent's method on
+    G - w between the two states that bracket it, each solve started from the nearer of them."""
+    vals = list(np.linspace(par(prev), par(st), 9)[1:])
+    sts = [prev] + march(stage, vals, stage.x(prev), stop_ok=True)
+    vs = [par(prev)] + vals[:len(sts) - 1]
+    i = next((j for j in range(1, len(sts)) if sts[j].G >= c.w), None)
+    if i is None:
+        lo, hi, a, b = prev, st, par(prev), par(st)
+    else:
+        lo, hi, a, b = sts[i - 1], sts[i], vs[i - 1], vs[i]
+
+    def g(v):
+        near = lo if abs(v - a) <= abs(v - b) else hi
+        return stage.solve(v, stage.x(near)).G - c.w
+    try:
+        v_on = brentq(g, a, b, xtol=1e-14)
+        s_on = stage.solve(v_on, stage.x(lo))
+        return on_stage.solve(c.w, pin.x(s_on)[:1] + [s_on.alpha] + pin.x(s_on)[1:])
+    except (ValueError, ConvergenceError) as exc:
+        raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": st.alpha}) from exc
 
 
 def _pinning(cfg, c, m):
-    on, stage, v_on = _onset(cfg, c, m)
-    u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))
-    v_m = 0.0 if stage.param == "alpha" else _control_value(c)(m)
-    x_m = stage.x(m) if stage.param == "alpha" else stage.x(m)[:1] + [0.0]
-    states = march(stage, v_m + u[:-1] * (v_on - v_m), x_m) if c.n_pin > 2 else []
-    return states + [on], on
+    """The pinning rows (sine-clustered toward the onset) and the onset. Marched in alpha; when the branch
+    was continued in the control past a fold in alpha (``_bracket_in_control``), the first half of the
+    rows is marched in alpha up to where that march handed over, the second half in the control."""
+    on, pin, ctl, turn = _onset(cfg, c, m)
+    if c.n_pin <= 2:
+        return [on], on
+    u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
+    if ctl is None:
+        return _rows(pin, u * on.alpha, pin.x(m), c) + [on], on
+    val = _control_value(c)
+    if turn is m:
+        return _rows(ctl, val(m) + u * (val(on) - val(m)), ctl.x(m)[:1] + [0.0], c) + [on], on
+    first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
+    second = _rows(ctl, val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn)), ctl.x(turn), c)
+    return first + second + [on], on
+
+
+def _rows(stage, values, x0, c):
+    """``march`` over pinning rows; a row whose state turns past vertical at the clamp (the bracket's
+    long steps can pass over a stretch of the branch that leaves Case I) is bisected against the last
+    solved row to 1e-10 and raised as the branch's Case I limit (a DomainError)."""
+    states = march(stage, values, x0, stop_ok=True)
+    if len(states) == len(values):
+        return states
+    good = states[-1] if states else None
+    if good is not None:
+        v_bad = values[len(states)]
+        try:
+            stage.solve(v_bad, stage.x(good))
+        except PastVertical:
+            lo, hi = getattr(good, stage.param) if stage.param == "alpha" else _control_value(c)(good), v_bad
+            while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
+                mid = 0.5 * (lo + hi)
+                try:
+                    good, lo = stage.solve(mid, stage.x(good)), mid
+                except PastVertical:
+                    hi = mid
+                except ConvergenceError:
+                    break
+            else:
+                name = stage.param if stage.param == "alpha" else ("d" if c.control == "displacement" else "p")
+                raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp "
+                                  f"(Case II beyond, outside the model) at {name} = {lo:.10g} (alpha = "
+                                  f"{good.alpha:.8g}, theta at the clamp {good.theta_end:.8g}), before G "
+                                  f"reaches w = {c.w:g}: G = {good.G:.6g} there (the onset of delamination)",
+                                  f"solved states either side of it, to 1e-10 in {name}",
+                                  "lower w, or change the loading end",
+                                  {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                                   "a_max": c.a_max, "locator": lo})
+        except ConvergenceError:
+            pass
+    return march(stage, values, x0)  # not shown to be the Case I limit: the march's own error
+
+
 
 
 def _control_value(c):
@@ -341,7 +412,7 @@ def _bracket_in_control(c, m, prev):
                 break
             continue
         if st.G >= c.w:
-            return good, good.alpha, st, st.alpha, ctl
+            return good, good.alpha, st, st.alpha, (ctl, prev)
         good = st
         vs.append(v)
         xs.append(ctl.x(st))
