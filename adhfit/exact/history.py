@@ -149,6 +149,8 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
     if len(states) < len(a_vals):
         if states:
             _case_one_end(stage, c, states[-1], a_vals[len(states)])
+        if len(states) > 1:
+            _case_one_in_control(stage, c, states[-2], states[-1])
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     return [free] + states, states[-1]
 
@@ -171,6 +173,12 @@ def _case_one_end(stage, c, good, a_bad):
     if found is None:
         return
     lo, good = found
+    _raise_case_one(c, lo, "solved states either side of it, to 1e-10")
+
+
+def _raise_case_one(c, lo, how):
+    """The Case I limit of making contact at contact radius ``lo``: an InputError for a_max under pressure
+    control, a DomainError under displacement control (as the large-stretch model words them)."""
     if c.control == "pressure":
         raise InputError("a_max", c.a_max, f"a number in [0.001, {lo:.6g}], the largest contact radius "
                          f"with a Case I exact membrane at d = {c.d:g}, lambda0 = {c.lambda0:g}",
@@ -178,10 +186,51 @@ def _case_one_end(stage, c, good, a_bad):
                          "past vertical at the clamp): lower a_max.")
     raise DomainError("the exact membrane would turn past vertical at the clamp while making contact "
                       "(Case I ends)", f"a_max must stay below {lo:.6g} at p = {c.p:g}, rs = {c.rs:g}, "
-                      f"lambda0 = {c.lambda0:g} (solved states either side of it, to 1e-10)",
+                      f"lambda0 = {c.lambda0:g} ({how})",
                       "lower a_max, or raise p",
                       {"control": c.control, "slip": c.slip, "p": c.p, "rs": c.rs, "lambda0": c.lambda0,
                        "a_max": c.a_max})
+
+
+def _case_one_in_control(stage, c, before, good):
+    """Making contact stopped at the solved Case I state ``good`` with no state at the next contact radius
+    (near the Case I limit the branch can meet the clamp's vertical tangentially, with the contact
+    radius nearly stationary): continue it in the control variable (d, or p under pressure control)
+    from ``good`` the way it was going; a state past vertical at the clamp is bisected against the last
+    solved one in the control to 1e-10 and raised as ``_case_one_end`` raises it. Returns when the
+    continuation passes a_max (not an end) or stalls (not shown)."""
+    val = _control_value(c)
+    if c.control == "displacement":
+        ctl = Stage(stage.cfg, "continuous", {"p": c.p}, ("lc", "rho_a"), ("clamp", "d"), {"d": good.d}, "d")
+    else:
+        ctl = Stage(stage.cfg, "continuous", {"p": good.p}, ("lc", "rho_a"), ("clamp", "d"), {"d": c.d}, "p")
+    sgn = math.copysign(1.0, val(good) - val(before))
+    h = max(abs(val(good) - val(before)), 1e-6)
+    top = good.a
+    for _ in range(400):
+        v = val(good) + sgn * h
+        try:
+            st = ctl.solve(v, ctl.x(good))
+        except PastVertical:
+            lo, hi = val(good), v
+            while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
+                mid = 0.5 * (lo + hi)
+                try:
+                    good, lo = ctl.solve(mid, ctl.x(good)), mid
+                except PastVertical:
+                    hi = mid
+                except ConvergenceError:
+                    return
+            _raise_case_one(c, max(top, good.a), "the largest contact radius on the branch, whose end "
+                            "is bracketed by solved states in the control to 1e-10")
+        except ConvergenceError:
+            h *= 0.5
+            if h < 1e-12 * (1.0 + abs(val(good))):
+                return
+            continue
+        if st.a >= c.a_max:
+            return
+        good, h, top = st, 1.5 * h, max(top, st.a)
 
 
 def _bisect_case_one(stage, good, lo: float, hi: float):
