@@ -45,13 +45,13 @@ def _res(c, cfg, m, y):
     return np.array(r), st
 
 
-def arclength_pinning(sc, ds=0.02, steps=800):
-    """The pinning branch from the end of loading by pseudo-arclength continuation in (unknowns, alpha):
-    the states in order until G >= w, the clamp passes vertical (|theta_end| >= pi/2) or the steps
-    shrink below 1e-7 (the branch ends)."""
+def arclength_pinning(sc, ds=0.02, steps=800, y0=None):
+    """The pinning branch from the end of loading (or from the unknowns ``y0``, alpha last) by
+    pseudo-arclength continuation in (unknowns, alpha): the states in order until G >= w, the clamp
+    passes vertical (|theta_end| >= pi/2) or the steps shrink below 1e-7 (the branch ends)."""
     c, cfg, m = _setup(sc)
     y = np.array([m.lc if c.slip == "frictionless" else m.l1p] + ([m.p] if c.control == "pressure" else [])
-                 + [0.0])
+                 + [0.0]) if y0 is None else np.asarray(y0, dtype=float)
     k = len(y)
 
     def jac(z):
@@ -162,23 +162,41 @@ def test_frictionless_pinning_going_slack_is_a_domain_error():
     assert g_end == pytest.approx(last.G, abs=2e-2)
 
 
-# frictionless pinning on a small sphere (rs = 0.496): the contact field grows with lc until the contact edge
-# reaches the sphere's equator, a = rs, where the branch ends (G = 0.044 < w = 0.45)
+# frictionless pinning on a small sphere (rs = 0.496): two branches leave the end of loading with alpha > 0
+# (alpha ~ (d - d_m)^2 there), one retracting (d rising) and one pressing on to the sphere's equator
+# (a = rs, G = 0.044 < w); the alpha march took the second and reported "no solution". The history is
+# the retracting one.
 EQUATOR = dict(control="displacement", slip="frictionless", p=-0.14495288731550682, w=0.4513969744342152,
                rs=0.4957602082298765, a_max=0.4311997675345813, lambda0=1.8833558792258702)
 
 
-def test_pinning_to_the_sphere_equator_is_a_domain_error():
-    with pytest.raises(DomainError) as err:
-        adhfit.simulate(**EQUATOR, points=200, membrane="exact")
-    msg = str(err.value)
-    assert "equator" in msg
-    a_end = float(msg.split(", a = ")[1].split(")")[0])
-    assert a_end == pytest.approx(EQUATOR["rs"], rel=1e-4)  # analytic: the equator is a = rs
-    c, path = arclength_pinning(EQUATOR)
-    # the independent branch runs into the equator (its last states, integrated past r = rs, are not
-    # states of the model) with G below w all the way
-    assert path[-1].a >= EQUATOR["rs"] * (1.0 - 1e-4) and max(s.G for s in path) < c.w
+def test_pinning_follows_the_branch_that_retracts():
+    r = adhfit.simulate(**EQUATOR, points=200, membrane="exact")
+    f = r.frame
+    pin = f[f.stage == "pinning"]
+    d_m = f[f.stage == "making_contact"].d.iloc[-1]
+    assert pin.d.iloc[0] > d_m and np.all(np.diff(pin.d.to_numpy()) > 0)  # retracting all the way
+    assert pin.G.iloc[-1] == pytest.approx(EQUATOR["w"], abs=1e-9)
+    # independent: a retracted state (d = d_m + 0.01) by Newton from the end of loading, then the arclength
+    # continuation from it, oriented by its first step, reaches G = w at the same alpha
+    c, cfg, m = _setup(EQUATOR)
+    y = np.array([m.lc, 1e-3])
+    for _ in range(40):
+        def res(z):
+            st = evaluate(cfg, c.p, z[0], m.rho_a, z[1], "frictionless")
+            return np.array([st.r_end - 1.0, st.d - (m.d + 0.01)])
+        r0 = res(y)
+        J = np.column_stack([(res(y + e) - r0) / e.sum() for e in np.diag([1e-7 * y[0], 1e-9])])
+        y = y - np.linalg.solve(J, r0)
+        if np.max(np.abs(r0)) < 1e-12:
+            break
+    assert 0.0 < y[1] < 1e-3  # alpha ~ (d - d_m)^2 near the end of loading
+    _, path = arclength_pinning(EQUATOR, ds=0.01, y0=y)
+    assert path[0].d > m.d + 0.01 and path[-1].G >= c.w  # it went on retracting and reached the onset
+    i = len(path) - 1
+    t = (c.w - path[i - 1].G) / (path[i].G - path[i - 1].G)
+    assert path[i - 1].alpha + t * (path[i].alpha - path[i - 1].alpha) == pytest.approx(
+        float(pin.alpha.iloc[-1]), abs=1e-5)
 
 
 # frictionless delamination, displacement control: the clamp turns vertical at a = 0.714 before detachment
@@ -214,3 +232,99 @@ def test_clamp_past_vertical_downwards_is_outside_case_one():
     c, path = arclength_pinning(DOWN_PAST_VERTICAL)
     # the independent branch passes theta_end = -pi/2 (downwards) before G reaches w
     assert path[-1].theta_end <= -0.5 * math.pi and path[-1].G < c.w
+
+
+# no-slip pinning at p = -0.92: the clamp tangent reaches -pi/2 at alpha = 0.107 (G = 0.108 < w); the alpha
+# bracket's long steps passed over it onto another branch and the pinning rows then failed
+# ("Newton iterations did not converge")
+JUMP = dict(control="displacement", slip="no-slip", p=-0.9212140191887281, w=6.845748455078082,
+            rs=0.07604898370037898, a_max=0.06722282506017598, lambda0=1.5567744192733814)
+
+
+def test_pinning_bracket_does_not_step_over_the_case_one_limit():
+    with pytest.raises(DomainError) as err:
+        adhfit.simulate(**JUMP, points=200, membrane="exact")
+    msg = str(err.value)
+    assert "turns past vertical at the clamp" in msg
+    alpha_end = float(msg.split("at alpha = ")[1].split(",")[0])
+    c, path = arclength_pinning(JUMP, ds=0.005)
+    assert path[-1].theta_end <= -0.5 * math.pi and max(s.G for s in path) < c.w
+    assert alpha_end == pytest.approx(path[-1].alpha, abs=2e-3)
+    assert path[-2].alpha <= alpha_end + 1e-9
+
+
+def arclength_making_contact(sc, ds=0.01, steps=3000):
+    """Making contact by pseudo-arclength continuation of r(clamp) = 1 in (lc, rho_a) (displacement
+    control): the states in order until the clamp passes vertical or the steps shrink below 1e-8."""
+    c, cfg, _ = _setup(dict(sc, a_max=0.02 * sc["a_max"]))
+    start = H._loading(cfg, c)[1]
+    y = np.array([start.lc, start.rho_a])
+
+    def res(z):
+        st = evaluate(cfg, c.p, z[0], z[1], 0.0, "continuous")
+        return np.array([st.r_end - 1.0]), st
+
+    def jac(z):
+        r0 = res(z)[0]
+        return np.array([[(res(z + e)[0][0] - r0[0]) / e[j] for j, e in
+                          enumerate(np.diag([1e-7 * max(1.0, abs(q)) for q in z]))]])
+    t = np.array([0.0, 1.0])
+    out = []
+    for _ in range(steps):
+        tn = np.linalg.solve(np.vstack([jac(y), t]), np.eye(2)[-1])
+        tn /= np.linalg.norm(tn)
+        t = tn if tn @ t >= 0 else -tn
+        z, ok = y + ds * t, False
+        for _ in range(30):
+            r, st = res(z)
+            F = np.append(r, (z - y) @ t - ds)
+            if not np.all(np.isfinite(F)):
+                break
+            if np.max(np.abs(F)) < 1e-12:
+                ok = True
+                break
+            z = z - np.linalg.solve(np.vstack([jac(z), t]), F)
+        if not ok:
+            ds *= 0.5
+            if ds < 1e-8:
+                break
+            continue
+        y = z
+        out.append(st)
+        if not abs(st.theta_end) < 0.5 * math.pi:
+            break
+    return c, out
+
+
+# making contact at p = -0.92: the contact radius stalls at 0.404084 as the clamp tangent meets -pi/2
+# tangentially; the march in a reported "Newton line search did not converge"
+STALL = dict(control="displacement", slip="no-slip", p=-0.9209532193877663, w=6.718050633006767,
+             rs=0.712172686849101, a_max=0.559048196633177, lambda0=2.7340736285041256)
+
+
+def test_making_contact_stalling_at_the_case_one_limit_is_a_domain_error():
+    with pytest.raises(DomainError) as err:
+        adhfit.simulate(**STALL, points=200, membrane="exact")
+    msg = str(err.value)
+    assert "while making contact" in msg
+    bound = float(msg.split("a_max must stay below ")[1].split()[0])
+    c, path = arclength_making_contact(STALL)
+    # the independent branch passes vertical at the clamp; the largest contact radius before it is the bound
+    assert path[-1].theta_end <= -0.5 * math.pi
+    a_top = max(s.a for s in path[:-1])  # its last Case I state lies up to one arclength step before the end
+    assert a_top <= bound + 1e-6 and bound - a_top < 1e-5
+
+
+# frictionless pinning on a small sphere (rs = 0.2798): the onset (G = w = 0.027) is met only with the
+# contact edge at the sphere's equator; delamination then found "no quasi-static branch from the onset"
+EQUATOR_ONSET = dict(control="displacement", slip="frictionless", p=0.3185165589164103, w=0.027253888747996682,
+                     rs=0.2797871848551301, delta_max=0.6507329121955819, lambda0=1.5066331781755788)
+
+
+def test_onset_at_the_sphere_equator_is_a_domain_error():
+    with pytest.raises(DomainError) as err:
+        adhfit.simulate(**EQUATOR_ONSET, points=200, membrane="exact")
+    assert "equator" in str(err.value)
+    c, path = arclength_pinning(EQUATOR_ONSET, ds=0.005)
+    first = next(i for i, s in enumerate(path) if s.a * c.crv >= 1.0 - 1e-6)
+    assert max(s.G for s in path[:first]) < c.w  # below w on every state short of the equator

@@ -253,12 +253,38 @@ def _bracket(pin, c, m, top):
     alpha, first state at or above w, its alpha), in one compiled call (``march.bracket_rows``: each
     step aims 3 % past where G ~ alpha^2 reaches w; failed steps and long steps finding G falling are
     halved)."""
+    if _alpha_starts_elsewhere(c, m, pin):
+        return _bracket_in_control(c, m, m)
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
     if st is None:
         _pinning_case_one_end(pin, c, prev, prev_a)
         return _bracket_in_control(c, m, prev)
     return prev, prev_a, st, alpha, None
+
+
+def _alpha_starts_elsewhere(c, m, pin) -> bool:
+    """Whether the pinning branch that retracts the control (d rising, or p falling) from the end of
+    loading is not the one a march in alpha from it follows. Near the end of loading two branches can
+    leave it with alpha > 0, one retracting the control and one pressing on (seen: frictionless pinning on
+    a small sphere, the second running to the sphere's equator); in alpha they are not told apart, in
+    the control they are: the state a small retraction away (Newton from the end of loading) is solved
+    again at its own alpha, and if that lands elsewhere the branch is followed in the control."""
+    cfg = pin.cfg
+    ctl = _control_stage(cfg, c, m)
+    val = _control_value(c)
+    sgn = 1.0 if c.control == "displacement" else -1.0
+    try:
+        s_r = ctl.solve(val(m) + sgn * 1e-4 * (1.0 + abs(val(m))), ctl.x(m)[:1] + [0.0])
+    except ConvergenceError:
+        return False
+    if not s_r.alpha > 0.0:
+        return False
+    try:
+        s_a = pin.solve(s_r.alpha, pin.x(m))
+    except ConvergenceError:
+        return True
+    return abs(val(s_a) - val(s_r)) > 1e-7 * (1.0 + abs(val(m)))
 
 
 def _pinning_case_one_end(pin, c, good, alpha_good):
@@ -439,8 +465,10 @@ def _bracket_in_control(c, m, prev):
     ctl = _control_stage(cfg, c, m)
     val = _control_value(c)
     v0, v1 = val(m), val(prev)
+    # from the end of loading: the way the control retracts (d rising, p falling); from the alpha march's
+    # last state: on the way it was going
     sgn = math.copysign(1.0, v1 - v0) if v1 != v0 else (1.0 if c.control == "displacement" else -1.0)
-    h = max(abs(v1 - v0) / 20.0, 1e-4)
+    h = max(abs(v1 - v0) / 20.0, 1e-4 * (1.0 + abs(v0)))
     good = prev  # solved (in alpha): the same equations
     vs, xs = [v1], [ctl.x(prev)[:1] + [prev.alpha]]
     for _ in range(2000):
