@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import adhfit
-from adhfit.errors import DomainError
+from adhfit.errors import ConvergenceError, DomainError
 from adhfit.exact import history as H
 from adhfit.exact.control import prepare
 from adhfit.exact.stages import delamination
@@ -234,11 +234,11 @@ def test_clamp_past_vertical_downwards_is_outside_case_one():
     assert path[-1].theta_end <= -0.5 * math.pi and path[-1].G < c.w
 
 
-# no-slip pinning at p = -0.92: the clamp tangent reaches -pi/2 at alpha = 0.107 (G = 0.108 < w); the alpha
-# bracket's long steps passed over it onto another branch and the pinning rows then failed
-# ("Newton iterations did not converge")
-JUMP = dict(control="displacement", slip="no-slip", p=-0.9212140191887281, w=6.845748455078082,
-            rs=0.07604898370037898, a_max=0.06722282506017598, lambda0=1.5567744192733814)
+# no-slip pinning at p = 0.98: the clamp tangent reaches pi/2 at alpha = 1.1678 (G = 1.47 < w = 5.58); the
+# alpha bracket's long steps passed over that stretch of the branch onto another one and its onset solve
+# failed ("exact pinning: onset G = w did not converge")
+JUMP = dict(control="displacement", slip="no-slip", p=0.9842074671895105, w=5.576721599580395,
+            rs=0.1363600075001485, a_max=0.11170492038040732, lambda0=2.359117113435467)
 
 
 def test_pinning_bracket_does_not_step_over_the_case_one_limit():
@@ -248,9 +248,26 @@ def test_pinning_bracket_does_not_step_over_the_case_one_limit():
     assert "turns past vertical at the clamp" in msg
     alpha_end = float(msg.split("at alpha = ")[1].split(",")[0])
     c, path = arclength_pinning(JUMP, ds=0.005)
-    assert path[-1].theta_end <= -0.5 * math.pi and max(s.G for s in path) < c.w
+    assert path[-1].theta_end >= 0.5 * math.pi and max(s.G for s in path) < c.w
+    assert path[-1].d > path[0].d  # the branch retracts (d rises): it is the history's
     assert alpha_end == pytest.approx(path[-1].alpha, abs=2e-3)
     assert path[-2].alpha <= alpha_end + 1e-9
+
+
+# no-slip pinning at p = -0.92: the branch a march in alpha follows from the end of loading presses on (d
+# falls) to the clamp's vertical at alpha = 0.107; that end is not the history's, so it is not claimed as
+# "no solution" (before: a DomainError from that branch)
+PRESSES_ON = dict(control="displacement", slip="no-slip", p=-0.9212140191887281, w=6.845748455078082,
+                  rs=0.07604898370037898, a_max=0.06722282506017598, lambda0=1.5567744192733814)
+
+
+def test_an_end_on_the_branch_that_presses_on_is_not_claimed():
+    c, path = arclength_pinning(PRESSES_ON, ds=0.005)
+    _, _, m = _setup(PRESSES_ON)
+    assert path[-1].d < m.d and path[-1].theta_end <= -0.5 * math.pi  # independent: it presses on
+    with pytest.raises(ConvergenceError) as err:
+        adhfit.simulate(**PRESSES_ON, points=200, membrane="exact")
+    assert not isinstance(err.value, DomainError)
 
 
 def arclength_making_contact(sc, ds=0.01, steps=3000):
@@ -315,16 +332,19 @@ def test_making_contact_stalling_at_the_case_one_limit_is_a_domain_error():
     assert a_top <= bound + 1e-6 and bound - a_top < 1e-5
 
 
-# frictionless pinning on a small sphere (rs = 0.2798): the onset (G = w = 0.027) is met only with the
-# contact edge at the sphere's equator; delamination then found "no quasi-static branch from the onset"
+# frictionless pinning on a small sphere (rs = 0.2798): the alpha march from the end of loading presses on
+# (d falls) and meets G = w = 0.027 only with the contact edge at the sphere's equator; delamination then
+# found "no quasi-static branch from the onset". No retracting pinning state is found: a ConvergenceError,
+# not a history through an edge at the equator and not a "no solution" claimed from the other branch
 EQUATOR_ONSET = dict(control="displacement", slip="frictionless", p=0.3185165589164103, w=0.027253888747996682,
                      rs=0.2797871848551301, delta_max=0.6507329121955819, lambda0=1.5066331781755788)
 
 
-def test_onset_at_the_sphere_equator_is_a_domain_error():
-    with pytest.raises(DomainError) as err:
-        adhfit.simulate(**EQUATOR_ONSET, points=200, membrane="exact")
-    assert "equator" in str(err.value)
+def test_onset_at_the_sphere_equator_on_the_branch_that_presses_on():
     c, path = arclength_pinning(EQUATOR_ONSET, ds=0.005)
+    _, _, m = _setup(EQUATOR_ONSET)
     first = next(i for i, s in enumerate(path) if s.a * c.crv >= 1.0 - 1e-6)
-    assert max(s.G for s in path[:first]) < c.w  # below w on every state short of the equator
+    assert max(s.G for s in path[:first]) < c.w and path[first].d < m.d  # independent: presses on
+    with pytest.raises(ConvergenceError) as err:
+        adhfit.simulate(**EQUATOR_ONSET, points=200, membrane="exact")
+    assert not isinstance(err.value, DomainError) and "presses on" in str(err.value)

@@ -257,10 +257,30 @@ def _bracket(pin, c, m, top):
         return _bracket_in_control(c, m, m)
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
+    if _presses_on(c, m, prev) or (st is not None and _presses_on(c, m, st)):
+        # the alpha march took a branch that presses on: the one that retracts, where there is one
+        try:
+            return _bracket_in_control(c, m, m)
+        except DomainError:
+            raise
+        except ConvergenceError as exc:
+            # an end found on the branch that presses on would not be the history's: not shown
+            raise ConvergenceError(f"exact pinning ({c.slip}): the march in alpha from the end of loading "
+                                   "presses on (the control moves past its loading-end value) and no "
+                                   "pinning state that retracts it was found",
+                                   {"w": c.w, "lambda0": c.lambda0, "control": c.control}) from exc
     if st is None:
         _pinning_case_one_end(pin, c, prev, prev_a)
         return _bracket_in_control(c, m, prev)
     return prev, prev_a, st, alpha, None
+
+
+def _presses_on(c, m, st) -> bool:
+    """Whether the pinning state ``st`` lies beyond the end of loading ``m`` in the loading direction
+    (d below its value, or p above it): off the branch that retracts from ``m``
+    (``_alpha_starts_elsewhere``)."""
+    v = _control_value(c)
+    return (v(st) < v(m)) if c.control == "displacement" else (v(st) > v(m))
 
 
 def _alpha_starts_elsewhere(c, m, pin) -> bool:
@@ -468,9 +488,11 @@ def _bracket_in_control(c, m, prev):
     # from the end of loading: the way the control retracts (d rising, p falling); from the alpha march's
     # last state: on the way it was going
     sgn = math.copysign(1.0, v1 - v0) if v1 != v0 else (1.0 if c.control == "displacement" else -1.0)
-    h = max(abs(v1 - v0) / 20.0, 1e-4 * (1.0 + abs(v0)))
+    h = max(abs(v1 - v0) / 20.0, 1e-3 * (1.0 + abs(v0)))
     good = prev  # solved (in alpha): the same equations
-    vs, xs = [v1], [ctl.x(prev)[:1] + [prev.alpha]]
+    # from the end of loading alpha starts at 0 with an infinite slope in the control (alpha ~ (d - d_m)^2
+    # where two branches leave it): Newton starts from a small alpha > 0
+    vs, xs = [v1], [ctl.x(prev)[:1] + [prev.alpha if prev is not m else 1e-3]]
     for _ in range(2000):
         v = vs[-1] + sgn * h
         why = None
