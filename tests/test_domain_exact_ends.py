@@ -254,22 +254,6 @@ def test_pinning_bracket_does_not_step_over_the_case_one_limit():
     assert path[-2].alpha <= alpha_end + 1e-9
 
 
-# no-slip pinning at p = -0.92: the branch a march in alpha follows from the end of loading presses on (d
-# falls) to the clamp's vertical at alpha = 0.107; that end is not the history's, so it is not claimed as
-# "no solution" (before: a DomainError from that branch)
-PRESSES_ON = dict(control="displacement", slip="no-slip", p=-0.9212140191887281, w=6.845748455078082,
-                  rs=0.07604898370037898, a_max=0.06722282506017598, lambda0=1.5567744192733814)
-
-
-def test_an_end_on_the_branch_that_presses_on_is_not_claimed():
-    c, path = arclength_pinning(PRESSES_ON, ds=0.005)
-    _, _, m = _setup(PRESSES_ON)
-    assert path[-1].d < m.d and path[-1].theta_end <= -0.5 * math.pi  # independent: it presses on
-    with pytest.raises(ConvergenceError) as err:
-        adhfit.simulate(**PRESSES_ON, points=200, membrane="exact")
-    assert not isinstance(err.value, DomainError)
-
-
 def arclength_making_contact(sc, ds=0.01, steps=3000):
     """Making contact by pseudo-arclength continuation of r(clamp) = 1 in (lc, rho_a) (displacement
     control): the states in order until the clamp passes vertical or the steps shrink below 1e-8."""
@@ -332,19 +316,19 @@ def test_making_contact_stalling_at_the_case_one_limit_is_a_domain_error():
     assert a_top <= bound + 1e-6 and bound - a_top < 1e-5
 
 
-# frictionless pinning on a small sphere (rs = 0.2798): the alpha march from the end of loading presses on
-# (d falls) and meets G = w = 0.027 only with the contact edge at the sphere's equator; delamination then
-# found "no quasi-static branch from the onset". No retracting pinning state is found: a ConvergenceError,
-# not a history through an edge at the equator and not a "no solution" claimed from the other branch
+# frictionless pinning on a small sphere (rs = 0.2798): no pinning state retracts the control from the end of
+# loading; the branch presses on (d falls: the end of loading is the turning point, docs/contracts.md A2)
+# and meets G = w = 0.027 only with the contact edge at the sphere's equator; delamination then found "no
+# quasi-static branch from the onset"
 EQUATOR_ONSET = dict(control="displacement", slip="frictionless", p=0.3185165589164103, w=0.027253888747996682,
                      rs=0.2797871848551301, delta_max=0.6507329121955819, lambda0=1.5066331781755788)
 
 
-def test_onset_at_the_sphere_equator_on_the_branch_that_presses_on():
+def test_onset_at_the_sphere_equator_is_a_domain_error():
+    with pytest.raises(DomainError) as err:
+        adhfit.simulate(**EQUATOR_ONSET, points=200, membrane="exact")
+    assert "equator" in str(err.value)
     c, path = arclength_pinning(EQUATOR_ONSET, ds=0.005)
     _, _, m = _setup(EQUATOR_ONSET)
     first = next(i for i, s in enumerate(path) if s.a * c.crv >= 1.0 - 1e-6)
-    assert max(s.G for s in path[:first]) < c.w and path[first].d < m.d  # independent: presses on
-    with pytest.raises(ConvergenceError) as err:
-        adhfit.simulate(**EQUATOR_ONSET, points=200, membrane="exact")
-    assert not isinstance(err.value, DomainError) and "presses on" in str(err.value)
+    assert max(s.G for s in path[:first]) < c.w and path[first].d < m.d  # below w short of the equator

@@ -263,12 +263,10 @@ def _bracket(pin, c, m, top):
             return _bracket_in_control(c, m, m)
         except DomainError:
             raise
-        except ConvergenceError as exc:
-            # an end found on the branch that presses on would not be the history's: not shown
-            raise ConvergenceError(f"exact pinning ({c.slip}): the march in alpha from the end of loading "
-                                   "presses on (the control moves past its loading-end value) and no "
-                                   "pinning state that retracts it was found",
-                                   {"w": c.w, "lambda0": c.lambda0, "control": c.control}) from exc
+        except ConvergenceError:
+            # none found: the branch that presses on is the history (docs/contracts.md A2: the control
+            # rises at once, the end of loading is the turning point), and its ends are its own
+            pass
     if st is None:
         _pinning_case_one_end(pin, c, prev, prev_a)
         return _bracket_in_control(c, m, prev)
