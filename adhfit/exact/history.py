@@ -671,17 +671,30 @@ def _delamination_end(stage, c, good, v_bad):
 def _check_membrane(c, rows):
     """Every solved state of the history must be one the membrane model represents (``_outside``):
     positive line tensions at the contact edge and a contact edge below the sphere's equator. The
-    first that is not is raised as a DomainError (the state itself shows it)."""
-    for stage, st in rows:
-        why = _outside(c, st) if st.rho_a > 0.0 else None
-        if why is not None:
-            t = min(min(K.tensions(st.l1m, st.l2a)), min(K.tensions(st.l1p, st.l2a)))
-            raise DomainError(f"a {stage} state of the exact membrane {_END_WORDS[why]}",
-                              f"at a = {st.a:.8g} (a/rs = {st.a * c.crv:.10g}), alpha = {st.alpha:.6g}: "
-                              f"least edge tension {t:.3g}",
-                              "lower w, or change the loading end",
-                              {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
-                               "a_max": c.a_max, "rs": c.rs})
+    first that is not is raised as a DomainError (the state itself shows it). Vectorized: the tensions
+    of all rows at once (``kernels.tensions`` called row by row cost ~1.5 ms a history)."""
+    if not rows:
+        return
+    v = np.array([(st.rho_a, st.a, st.l1m, st.l1p, st.l2a) for _, st in rows], dtype=float)
+    rho, a, l1m, l1p, l2 = v.T
+
+    def least(l1):
+        j = 1.0 / (l1 * l2) ** 3
+        return np.minimum(l1 / l2 - j, l2 / l1 - j)
+    bad = (rho > 0.0) & ~(np.minimum(least(l1m), least(l1p)) > 0.0)
+    if c.crv > 0.0:
+        bad |= (rho > 0.0) & ~(a * c.crv < 1.0 - 1e-6)
+    if not bad.any():
+        return
+    stage, st = rows[int(np.argmax(bad))]
+    why = _outside(c, st)
+    t = min(min(K.tensions(st.l1m, st.l2a)), min(K.tensions(st.l1p, st.l2a)))
+    raise DomainError(f"a {stage} state of the exact membrane {_END_WORDS[why]}",
+                      f"at a = {st.a:.8g} (a/rs = {st.a * c.crv:.10g}), alpha = {st.alpha:.6g}: "
+                      f"least edge tension {t:.3g}",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "rs": c.rs})
 
 
 def _vertex(x, y, c, h):
