@@ -792,9 +792,13 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     ------
     InputError
         A parameter out of range.
+    DomainError
+        The history leaves the model's domain, at a bound bisected between solved states: the clamp
+        tangent past vertical either way (Case I only), a line tension at the contact edge falling to 0
+        (slack or compressive), the contact edge at the sphere's equator, a tensile adhesionless
+        contact force.
     ConvergenceError
-        A state outside the model's domain (Case I only: the membrane must not turn past vertical at
-        the clamp) or a failed solve.
+        A failed solve where a solution may exist.
     """
     c = prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points, n)
     cfg = Config(c.lambda0, c.crv, c.n)
