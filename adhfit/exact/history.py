@@ -10,6 +10,7 @@ from ..errors import ConvergenceError, DomainError, InputError
 from ..histories import History
 from .control import Control, prepare
 from .march import PREDICT, vertex
+from . import kernels as K
 from .stages import PastVertical, Stage, branch_end, delamination, making_contact, onset, pinning
 from .state import DEFAULT_N, Config, State
 
@@ -148,6 +149,8 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
     if len(states) < len(a_vals):
         if states:
             _case_one_end(stage, c, states[-1], a_vals[len(states)])
+        if len(states) > 1:
+            _case_one_in_control(stage, c, states[-2], states[-1])
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     return [free] + states, states[-1]
 
@@ -170,6 +173,12 @@ def _case_one_end(stage, c, good, a_bad):
     if found is None:
         return
     lo, good = found
+    _raise_case_one(c, lo, "solved states either side of it, to 1e-10")
+
+
+def _raise_case_one(c, lo, how):
+    """The Case I limit of making contact at contact radius ``lo``: an InputError for a_max under pressure
+    control, a DomainError under displacement control (as the large-stretch model words them)."""
     if c.control == "pressure":
         raise InputError("a_max", c.a_max, f"a number in [0.001, {lo:.6g}], the largest contact radius "
                          f"with a Case I exact membrane at d = {c.d:g}, lambda0 = {c.lambda0:g}",
@@ -177,10 +186,51 @@ def _case_one_end(stage, c, good, a_bad):
                          "past vertical at the clamp): lower a_max.")
     raise DomainError("the exact membrane would turn past vertical at the clamp while making contact "
                       "(Case I ends)", f"a_max must stay below {lo:.6g} at p = {c.p:g}, rs = {c.rs:g}, "
-                      f"lambda0 = {c.lambda0:g} (solved states either side of it, to 1e-10)",
+                      f"lambda0 = {c.lambda0:g} ({how})",
                       "lower a_max, or raise p",
                       {"control": c.control, "slip": c.slip, "p": c.p, "rs": c.rs, "lambda0": c.lambda0,
                        "a_max": c.a_max})
+
+
+def _case_one_in_control(stage, c, before, good):
+    """Making contact stopped at the solved Case I state ``good`` with no state at the next contact radius
+    (near the Case I limit the branch can meet the clamp's vertical tangentially, with the contact
+    radius nearly stationary): continue it in the control variable (d, or p under pressure control)
+    from ``good`` the way it was going; a state past vertical at the clamp is bisected against the last
+    solved one in the control to 1e-10 and raised as ``_case_one_end`` raises it. Returns when the
+    continuation passes a_max (not an end) or stalls (not shown)."""
+    val = _control_value(c)
+    if c.control == "displacement":
+        ctl = Stage(stage.cfg, "continuous", {"p": c.p}, ("lc", "rho_a"), ("clamp", "d"), {"d": good.d}, "d")
+    else:
+        ctl = Stage(stage.cfg, "continuous", {"p": good.p}, ("lc", "rho_a"), ("clamp", "d"), {"d": c.d}, "p")
+    sgn = math.copysign(1.0, val(good) - val(before))
+    h = max(abs(val(good) - val(before)), 1e-6)
+    top = good.a
+    for _ in range(400):
+        v = val(good) + sgn * h
+        try:
+            st = ctl.solve(v, ctl.x(good))
+        except PastVertical:
+            lo, hi = val(good), v
+            while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
+                mid = 0.5 * (lo + hi)
+                try:
+                    good, lo = ctl.solve(mid, ctl.x(good)), mid
+                except PastVertical:
+                    hi = mid
+                except ConvergenceError:
+                    return
+            _raise_case_one(c, max(top, good.a), "the largest contact radius on the branch, whose end "
+                            "is bracketed by solved states in the control to 1e-10")
+        except ConvergenceError:
+            h *= 0.5
+            if h < 1e-12 * (1.0 + abs(val(good))):
+                return
+            continue
+        if st.a >= c.a_max:
+            return
+        good, h, top = st, 1.5 * h, max(top, st.a)
 
 
 def _bisect_case_one(stage, good, lo: float, hi: float):
@@ -203,15 +253,56 @@ def _bracket(pin, c, m, top):
     alpha, first state at or above w, its alpha), in one compiled call (``march.bracket_rows``: each
     step aims 3 % past where G ~ alpha^2 reaches w; failed steps and long steps finding G falling are
     halved)."""
+    if _alpha_starts_elsewhere(c, m, pin):
+        return _bracket_in_control(c, m, m)
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
+    if _presses_on(c, m, prev) or (st is not None and _presses_on(c, m, st)):
+        # the alpha march took a branch that presses on: the one that retracts, where there is one
+        try:
+            return _bracket_in_control(c, m, m)
+        except DomainError:
+            raise
+        except ConvergenceError:
+            # none found: the branch that presses on is the history (docs/contracts.md A2: the control
+            # rises at once, the end of loading is the turning point), and its ends are its own
+            pass
     if st is None:
         _pinning_case_one_end(pin, c, prev, prev_a)
-        raise ConvergenceError("exact pinning: G does not reach w before the pinning branch ends "
-                               "(the clamp turning past vertical, or the contact region going slack: "
-                               "stretch -> 1, outside a membrane model)",
-                               {"w": c.w, "alpha": prev_a, "lc": prev.lc, "lambda0": c.lambda0})
-    return prev, prev_a, st, alpha
+        return _bracket_in_control(c, m, prev)
+    return prev, prev_a, st, alpha, None
+
+
+def _presses_on(c, m, st) -> bool:
+    """Whether the pinning state ``st`` lies beyond the end of loading ``m`` in the loading direction
+    (d below its value, or p above it): off the branch that retracts from ``m``
+    (``_alpha_starts_elsewhere``)."""
+    v = _control_value(c)
+    return (v(st) < v(m)) if c.control == "displacement" else (v(st) > v(m))
+
+
+def _alpha_starts_elsewhere(c, m, pin) -> bool:
+    """Whether the pinning branch that retracts the control (d rising, or p falling) from the end of
+    loading is not the one a march in alpha from it follows. Near the end of loading two branches can
+    leave it with alpha > 0, one retracting the control and one pressing on (seen: frictionless pinning on
+    a small sphere, the second running to the sphere's equator); in alpha they are not told apart, in
+    the control they are: the state a small retraction away (Newton from the end of loading) is solved
+    again at its own alpha, and if that lands elsewhere the branch is followed in the control."""
+    cfg = pin.cfg
+    ctl = _control_stage(cfg, c, m)
+    val = _control_value(c)
+    sgn = 1.0 if c.control == "displacement" else -1.0
+    try:
+        s_r = ctl.solve(val(m) + sgn * 1e-4 * (1.0 + abs(val(m))), ctl.x(m)[:1] + [0.0])
+    except ConvergenceError:
+        return False
+    if not s_r.alpha > 0.0:
+        return False
+    try:
+        s_a = pin.solve(s_r.alpha, pin.x(m))
+    except ConvergenceError:
+        return True
+    return abs(val(s_a) - val(s_r)) > 1e-7 * (1.0 + abs(val(m)))
 
 
 def _pinning_case_one_end(pin, c, good, alpha_good):
@@ -245,30 +336,247 @@ def _pinning_case_one_end(pin, c, good, alpha_good):
 
 
 def _onset(cfg, c, m):
-    """Bracket G = w along pinning (``_bracket``), then solve it."""
+    """Bracket G = w along pinning (``_bracket``), then solve it. Returns (onset, the pinning stage in
+    alpha, the stage in the control that continued it or None, the state where the march in alpha
+    handed over to it)."""
     pin = pinning(cfg, c.control, c.slip, m, c.p, c.d)
     top = 0.5 * math.pi if c.slip == "frictionless" else math.pi
-    prev, prev_a, st, alpha = _bracket(pin, c, m, top)
+    prev, prev_a, st, alpha, ctl = _bracket(pin, c, m, top)
+    turn = None
+    if ctl is not None:
+        ctl, turn = ctl
     on_stage = onset(cfg, c.control, c.slip, m, c.w, c.p, c.d)
     t = (c.w - prev.G) / (st.G - prev.G)
     guess = [a + t * (b - a) for a, b in zip(pin.x(prev), pin.x(st))]
-    guess = guess[:1] + [prev_a + t * (alpha - prev_a)] + guess[1:]
+    guess = guess[:1] + [prev.alpha + t * (st.alpha - prev.alpha)] + guess[1:]
     try:
-        return on_stage.solve(c.w, guess), pin
+        on = on_stage.solve(c.w, guess)
     except ConvergenceError:
-        try:
-            a_on = brentq(lambda a: pin.solve(a, pin.x(prev)).G - c.w, prev_a, alpha, xtol=1e-14)
-        except ValueError as exc:
-            raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": alpha}) from exc
-        st = pin.solve(a_on, pin.x(prev))
-        return on_stage.solve(c.w, pin.x(st)[:1] + [a_on] + pin.x(st)[1:]), pin
+        stage, par = (pin, lambda s: s.alpha) if ctl is None else (ctl, _control_value(c))
+        on = _onset_between(stage, par, on_stage, pin, c, prev, st)
+    return on, pin, ctl, turn
+
+
+def _onset_between(stage, par, on_stage, pin, c, prev, st):
+    """The onset between the pinning states ``prev`` (G < w) and ``st`` (G >= w) when Newton on it from
+    their interpolation failed: march the stage across the bracket on 8 steps, then Brent's method on
+    G - w between the two states that bracket it, each solve started from the nearer of them."""
+    vals = list(np.linspace(par(prev), par(st), 9)[1:])
+    sts = [prev] + march(stage, vals, stage.x(prev), stop_ok=True)
+    vs = [par(prev)] + vals[:len(sts) - 1]
+    i = next((j for j in range(1, len(sts)) if sts[j].G >= c.w), None)
+    if i is None:
+        lo, hi, a, b = prev, st, par(prev), par(st)
+    else:
+        lo, hi, a, b = sts[i - 1], sts[i], vs[i - 1], vs[i]
+
+    def g(v):
+        near = lo if abs(v - a) <= abs(v - b) else hi
+        return stage.solve(v, stage.x(near)).G - c.w
+    try:
+        v_on = brentq(g, a, b, xtol=1e-14)
+        s_on = stage.solve(v_on, stage.x(lo))
+        return on_stage.solve(c.w, pin.x(s_on)[:1] + [s_on.alpha] + pin.x(s_on)[1:])
+    except (ValueError, ConvergenceError) as exc:
+        raise ConvergenceError("exact pinning: onset G = w", {"w": c.w, "alpha": st.alpha}) from exc
 
 
 def _pinning(cfg, c, m):
-    on, pin = _onset(cfg, c, m)
-    u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))
-    states = march(pin, u[:-1] * on.alpha, pin.x(m)) if c.n_pin > 2 else []
-    return states + [on], on
+    """The pinning rows (sine-clustered toward the onset) and the onset. Marched in alpha; when the branch
+    was continued in the control past a fold in alpha (``_bracket_in_control``), the first half of the
+    rows is marched in alpha up to where that march handed over, the second half in the control."""
+    on, pin, ctl, turn = _onset(cfg, c, m)
+    if c.n_pin <= 2:
+        return [on], on
+    u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
+    if ctl is None:
+        return _rows(pin, u * on.alpha, pin.x(m), c) + [on], on
+    val = _control_value(c)
+    if turn is m:
+        return _rows(ctl, val(m) + u * (val(on) - val(m)), ctl.x(m)[:1] + [0.0], c) + [on], on
+    first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
+    second = _rows(ctl, val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn)), ctl.x(turn), c)
+    return first + second + [on], on
+
+
+def _rows(stage, values, x0, c):
+    """``march`` over pinning rows; a row whose state turns past vertical at the clamp (the bracket's
+    long steps can pass over a stretch of the branch that leaves Case I) is bisected against the last
+    solved row to 1e-10 and raised as the branch's Case I limit (a DomainError)."""
+    states = march(stage, values, x0, stop_ok=True)
+    if len(states) == len(values):
+        return states
+    good = states[-1] if states else None
+    if good is not None:
+        v_bad = values[len(states)]
+        try:
+            stage.solve(v_bad, stage.x(good))
+        except PastVertical:
+            lo, hi = getattr(good, stage.param) if stage.param == "alpha" else _control_value(c)(good), v_bad
+            while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
+                mid = 0.5 * (lo + hi)
+                try:
+                    good, lo = stage.solve(mid, stage.x(good)), mid
+                except PastVertical:
+                    hi = mid
+                except ConvergenceError:
+                    break
+            else:
+                name = stage.param if stage.param == "alpha" else ("d" if c.control == "displacement" else "p")
+                raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp "
+                                  f"(Case II beyond, outside the model) at {name} = {lo:.10g} (alpha = "
+                                  f"{good.alpha:.8g}, theta at the clamp {good.theta_end:.8g}), before G "
+                                  f"reaches w = {c.w:g}: G = {good.G:.6g} there (the onset of delamination)",
+                                  f"solved states either side of it, to 1e-10 in {name}",
+                                  "lower w, or change the loading end",
+                                  {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                                   "a_max": c.a_max, "locator": lo})
+        except ConvergenceError:
+            pass
+    return march(stage, values, x0)  # not shown to be the Case I limit: the march's own error
+
+
+
+
+def _control_value(c):
+    """The control variable of a state: the gap d under displacement control, p under pressure control."""
+    return (lambda s: s.d) if c.control == "displacement" else (lambda s: s.p)
+
+
+def _control_stage(cfg, c, m) -> Stage:
+    """Pinning parameterized by the control variable (d, or p under pressure control) with the contact
+    angle among the unknowns: it follows the branch through a fold in alpha (alpha rising to a maximum
+    and falling again while d keeps rising and G keeps growing), which a march in alpha cannot pass."""
+    fx = {"rho_a": m.rho_a}
+    if c.slip == "frictionless":
+        edge, unk = "frictionless", ("lc", "alpha")
+    else:
+        edge, unk = "given", ("l1p", "alpha")
+        fx["lc"] = m.lc
+    if c.control == "displacement":
+        return Stage(cfg, edge, {**fx, "p": c.p}, unk, ("clamp", "d"), {"d": m.d}, "d")
+    return Stage(cfg, edge, {**fx, "p": m.p}, unk, ("clamp", "d"), {"d": c.d}, "p")
+
+
+def _outside(c, st) -> str | None:
+    """Why a solved Case I state is outside the membrane model, or None: a line tension at the contact
+    edge (either side: the contact region's least tension is at its edge) that is not positive (the
+    membrane slack or in compression: it would wrinkle), or a contact edge at or past the equator of
+    the sphere (a >= rs: the membrane would wrap under it)."""
+    # the contact field's r = rs sin(s/rs) reaches rs at a finite s and sticks there (dr = 0 beyond):
+    # an edge within 1e-6 of rs has its material past the equator
+    if st.rho_a > 0.0 and c.crv > 0.0 and not st.a * c.crv < 1.0 - 1e-6:
+        return "equator"
+    t = min(min(K.tensions(st.l1m, st.l2a)), min(K.tensions(st.l1p, st.l2a)))
+    return None if t > 0.0 else "slack"
+
+
+def _bracket_in_control(c, m, prev):
+    """The alpha march of pinning stopped at ``prev`` before G reached w: continue the branch in the
+    control variable (``_control_stage``) until G >= w (returns the bracket as ``_bracket``), or prove
+    where it ends before that: the clamp turning past vertical, a line tension at the contact edge
+    reaching 0 (frictionless pinning: T1- = T1+ cos(alpha) -> 0 as alpha -> pi/2; or a compressive
+    hoop tension), or the contact edge reaching the sphere's equator. Each is bisected between solved
+    states in the control to 1e-10 and raised as a DomainError; a continuation that stalls anywhere
+    else is a ConvergenceError."""
+    cfg = Config(c.lambda0, c.crv, c.n)
+    ctl = _control_stage(cfg, c, m)
+    val = _control_value(c)
+    v0, v1 = val(m), val(prev)
+    # from the end of loading: the way the control retracts (d rising, p falling); from the alpha march's
+    # last state: on the way it was going
+    sgn = math.copysign(1.0, v1 - v0) if v1 != v0 else (1.0 if c.control == "displacement" else -1.0)
+    h = max(abs(v1 - v0) / 20.0, 1e-3 * (1.0 + abs(v0)))
+    good = prev  # solved (in alpha): the same equations
+    # from the end of loading alpha starts at 0 with an infinite slope in the control (alpha ~ (d - d_m)^2
+    # where two branches leave it): Newton starts from a small alpha > 0
+    vs, xs = [v1], [ctl.x(prev)[:1] + [prev.alpha if prev is not m else 1e-3]]
+    for _ in range(2000):
+        v = vs[-1] + sgn * h
+        why = None
+        try:
+            st = ctl.solve(v, _predict(v, vs[-3:], xs[-3:], xs[-1]))
+            if abs(st.theta_end - good.theta_end) > 0.1 or abs(st.alpha - good.alpha) > 0.1:
+                raise ConvergenceError("a step onto another branch")  # as the alpha march's guard
+            why = _outside(c, st)
+        except PastVertical:
+            why = "vertical"
+        except ConvergenceError:
+            h *= 0.5
+            if h < 1e-10 * (1.0 + abs(vs[-1])):
+                break
+            continue
+        if why is not None:
+            _control_end(ctl, c, good, vs[-1], v, why)  # raises when the end is shown
+            h *= 0.5
+            if h < 1e-10 * (1.0 + abs(vs[-1])):
+                break
+            continue
+        if st.G >= c.w:
+            return good, good.alpha, st, st.alpha, (ctl, prev)
+        good = st
+        vs.append(v)
+        xs.append(ctl.x(st))
+        h *= 1.5
+    last = good
+    if c.slip == "frictionless" and last.alpha > 0.5 * math.pi - 1e-5:
+        t = min(K.tensions(last.l1m, last.l2a))
+        raise DomainError(f"the exact pinning branch (frictionless) {_END_WORDS['slack']} as alpha -> pi/2 "
+                          f"(T1- = T1+ cos(alpha)), before G reaches w = {c.w:g}",
+                          f"the branch stalls at alpha = {last.alpha:.10g} (pi/2 - {0.5 * math.pi - last.alpha:.2g}), "
+                          f"least edge tension {t:.3g}, G = {last.G:.6g} < w",
+                          "lower w, or change the loading end",
+                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                           "a_max": c.a_max})
+    if c.crv > 0.0 and last.a * c.crv > 1.0 - 1e-4:
+        raise DomainError(f"the exact pinning branch ({c.slip}) carries the contact edge to the sphere's "
+                          f"equator (a = rs) before G reaches w = {c.w:g}: wrapping past it is outside the "
+                          "model", f"the branch stalls at a = {last.a:.8g} (rs = {c.rs:.8g}, "
+                          f"{c.control} control at {val(last):.8g}) with G = {last.G:.6g} < w",
+                          "lower w, or change the loading end",
+                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                           "a_max": c.a_max, "rs": c.rs})
+    raise ConvergenceError("exact pinning: G does not reach w before the pinning branch (continued in "
+                           "the control variable) stalls",
+                           {"w": c.w, "alpha": last.alpha, "G": last.G, "lc": last.lc, "lambda0": c.lambda0})
+
+
+_END_WORDS = {
+    "vertical": "turns past vertical at the clamp (Case II beyond, outside the model)",
+    "slack": "has a line tension at the contact edge fall to 0 (the membrane going slack, or into "
+             "compression, where it would wrinkle: outside a membrane model)",
+    "equator": "carries the contact edge to the sphere's equator (a = rs: wrapping past it is outside "
+               "the model)"}
+
+
+def _control_end(ctl, c, good, v_good, v_bad, why):
+    """Bisect in the control between the valid state ``good`` (at ``v_good``) and ``v_bad`` whose state is
+    outside the model for the reason ``why``; raise the end as a DomainError when every state between
+    solves (returns otherwise: not shown)."""
+    lo, hi = v_good, v_bad
+    while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
+        mid = 0.5 * (lo + hi)
+        try:
+            st = ctl.solve(mid, ctl.x(good))
+            bad = _outside(c, st)
+        except PastVertical:
+            bad = "vertical"
+        except ConvergenceError:
+            return
+        if bad is None:
+            good, lo = st, mid
+        elif bad == why:
+            hi = mid
+        else:
+            return
+    name = "d" if c.control == "displacement" else "p"
+    raise DomainError(f"the exact pinning branch ({c.slip}) {_END_WORDS[why]} at {name} = {lo:.10g} "
+                      f"(alpha = {good.alpha:.8g}, a = {good.a:.6g}), before G reaches w = {c.w:g}: "
+                      f"G = {good.G:.6g} there (the onset of delamination)",
+                      f"solved states either side of it, to 1e-10 in {name}",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": lo})
 
 
 def _delamination(cfg, c, m, on):
@@ -315,10 +623,78 @@ def _finish(stage, states, rho, c, no_slip):
     if no_slip and more and more[-1].alpha < 0.2:  # the branch end, reached on the finer grid
         return states + kept + ([] if kept and kept[-1] is more[-1] else [more[-1]])
     last = (more or states)[-1]
+    _check_membrane(c, [("delamination", s) for s in states + more])  # e.g. the edge stuck at the equator
+    _delamination_end(stage, c, last, rest[len(more)])
+    if c.crv > 0.0 and last.a * c.crv > 1.0 - 1e-4:
+        raise DomainError(f"the exact delamination branch ({c.slip}) carries the contact edge to the sphere's "
+                          "equator (a = rs: wrapping past it is outside the model) before detachment",
+                          f"the march stalls at a = {last.a:.8g} (a/rs = {last.a * c.crv:.8g}), alpha = "
+                          f"{last.alpha:.6g}, on the history's grid and on one four times finer",
+                          "lower w, or change the loading end",
+                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                           "a_max": c.a_max, "rs": c.rs})
     raise ConvergenceError(f"exact delamination ({c.slip}): the march stopped at a = {last.a:.6g} "
                            f"(alpha = {last.alpha:.4g}) before detachment, on the history's grid and "
                            "on one four times finer",
                            {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max, "control": c.control})
+
+
+def _delamination_end(stage, c, good, v_bad):
+    """The delamination march stopped after the solved state ``good``: when the state at ``v_bad`` (the
+    next rho_a) solves and turns past vertical at the clamp, bisect in rho_a between solved states for
+    the Case I limit and raise it as a DomainError. Returns when not shown."""
+    try:
+        stage.solve(v_bad, stage.x(good))
+        return
+    except PastVertical:
+        pass
+    except ConvergenceError:
+        return
+    lo, hi = good.rho_a, v_bad
+    while abs(hi - lo) > 1e-10 * abs(lo):
+        mid = 0.5 * (lo + hi)
+        try:
+            good, lo = stage.solve(mid, stage.x(good)), mid
+        except PastVertical:
+            hi = mid
+        except ConvergenceError:
+            return
+    raise DomainError(f"the exact delamination branch ({c.slip}) turns past vertical at the clamp at a = "
+                      f"{good.a:.8g} (alpha = {good.alpha:.6g}, d = {good.d:.8g}), before detachment (Case II "
+                      "beyond, outside the model)",
+                      "solved states either side of it, to 1e-10 in the edge's material coordinate",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": good.a})
+
+
+def _check_membrane(c, rows):
+    """Every solved state of the history must be one the membrane model represents (``_outside``):
+    positive line tensions at the contact edge and a contact edge below the sphere's equator. The
+    first that is not is raised as a DomainError (the state itself shows it). Vectorized: the tensions
+    of all rows at once (``kernels.tensions`` called row by row cost ~1.5 ms a history)."""
+    if not rows:
+        return
+    v = np.array([(st.rho_a, st.a, st.l1m, st.l1p, st.l2a) for _, st in rows], dtype=float)
+    rho, a, l1m, l1p, l2 = v.T
+
+    def least(l1):
+        j = 1.0 / (l1 * l2) ** 3
+        return np.minimum(l1 / l2 - j, l2 / l1 - j)
+    bad = (rho > 0.0) & ~(np.minimum(least(l1m), least(l1p)) > 0.0)
+    if c.crv > 0.0:
+        bad |= (rho > 0.0) & ~(a * c.crv < 1.0 - 1e-6)
+    if not bad.any():
+        return
+    stage, st = rows[int(np.argmax(bad))]
+    why = _outside(c, st)
+    t = min(min(K.tensions(st.l1m, st.l2a)), min(K.tensions(st.l1p, st.l2a)))
+    raise DomainError(f"a {stage} state of the exact membrane {_END_WORDS[why]}",
+                      f"at a = {st.a:.8g} (a/rs = {st.a * c.crv:.10g}), alpha = {st.alpha:.6g}: "
+                      f"least edge tension {t:.3g}",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "rs": c.rs})
 
 
 def _vertex(x, y, c, h):
@@ -416,16 +792,22 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     ------
     InputError
         A parameter out of range.
+    DomainError
+        The history leaves the model's domain, at a bound bisected between solved states: the clamp
+        tangent past vertical either way (Case I only), a line tension at the contact edge falling to 0
+        (slack or compressive), the contact edge at the sphere's equator, a tensile adhesionless
+        contact force.
     ConvergenceError
-        A state outside the model's domain (Case I only: the membrane must not turn past vertical at
-        the clamp) or a failed solve.
+        A failed solve where a solution may exist.
     """
     c = prepare(control, slip, p, d, w, rs, lambda0, a_max, delta_max, p_max, points, n)
     cfg = Config(c.lambda0, c.crv, c.n)
     mc, m = _loading(cfg, c)
     pin, on = _pinning(cfg, c, m)
     _check_compressive(c, mc, m)
+    _check_membrane(c, [("making_contact", s) for s in mc[1:]] + [("pinning", s) for s in pin])
     dl, stage, ends_at = _delamination(cfg, c, m, on)
+    _check_membrane(c, [("delamination", s) for s in dl])
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
     turn = _first_turn(stage, m, pin, dl, key, sign)

@@ -89,7 +89,7 @@ def march_rows(edge, crv, beta, n, vals, unk, res, tg, in_tg, pidx, values, vs0,
         status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, vv, unk, res, tt, guess, J, tol,
                                                   max_iter, cache)
         total += shots
-        if status != N.OK or not o[2] < 0.5 * math.pi:
+        if status != N.OK or not abs(o[2]) < 0.5 * math.pi:
             return i, rows, J, total
         vs[h + i] = abscissa(v, scale)
         xs[h + i] = x
@@ -142,10 +142,12 @@ def bracket_rows(edge, crv, beta, n, vals, unk, res, tg, pidx, x_m, g_m, w, top,
     """Step ``vals[pidx]`` (pinning: the contact angle alpha) from 0 (unknowns ``x_m``, G = ``g_m``) until
     G >= w: the step loop of ``history._bracket`` compiled. A step aims 3 % past where G ~ alpha^2
     reaches w (at most 4 times the last step and 0.3); a failed step (Newton, or past vertical at the
-    clamp) and one longer than 0.04 finding G falling (a fold, another branch) are halved and steps
-    no longer grow; one reaching ``top`` is cut to 0.04, then ends the search. Returns (found, alpha
-    and row of the last state below w, alpha and row of the first at or above w, Jacobian, shots);
-    a row is the unknowns then the N_OUT observables."""
+    clamp), one longer than 0.04 finding G falling (a fold, another branch) and one longer than 1e-3
+    turning the clamp tangent by more than 0.1 (it may have passed over a stretch of the branch beyond
+    vertical at the clamp onto another branch) are halved and steps no longer grow; one reaching
+    ``top`` is cut to 0.04, then ends the search. Returns (found, alpha and row of the last state
+    below w, alpha and row of the first at or above w, Jacobian, shots); a row is the unknowns then
+    the N_OUT observables."""
     k = unk.shape[0]
     cap = 64
     vs = np.empty(cap)
@@ -168,7 +170,8 @@ def bracket_rows(edge, crv, beta, n, vals, unk, res, tg, pidx, x_m, g_m, w, top,
         status, x, o, J, shots = N.newton_cached(edge, crv, beta, n, v, unk, res, tg,
                                                   predict(alpha, vs, xs, cnt, x_m), J, tol, max_iter, cache)
         total += shots
-        if status != N.OK or not o[2] < 0.5 * math.pi or (step > 0.04 and o[5] < prev_g):
+        if status != N.OK or not abs(o[2]) < 0.5 * math.pi or (step > 0.04 and o[5] < prev_g) \
+                or (step > 1e-3 and abs(o[2] - prev[k + 2]) > 0.1):
             step, grow = 0.5 * step, False
             continue
         row[:k] = x

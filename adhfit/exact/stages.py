@@ -50,7 +50,7 @@ class Stage:
             fixed[self.param] = value
         st = solve_state(self.cfg, self.edge, fixed, self.unknowns, x0, self.residuals, targets,
                          memo=self.memo, tol=tol)
-        if not st.theta_end < 0.5 * math.pi:
+        if not abs(st.theta_end) < 0.5 * math.pi:  # either way past vertical: Case II
             raise PastVertical("exact membrane: the free membrane turns past vertical at the clamp "
                                    "(Case II, outside the model: Case I only)",
                                    {**fixed, **targets, self.param: value, "lambda0": self.cfg.lambda0})
