@@ -53,7 +53,9 @@ def test_misfit_is_the_fits_own_delta_bic_on_the_noiseless_curve():
 def test_an_undecided_slip_widens_the_reported_interval():
     """Undecided, the fit reports the hull of both conditions' intervals (adhfit.fitting.stage.reported): the
     expected width mixes the decided width and the hull with the verdict's probabilities (the benchmark checks
-    the hull against undecided replicate fits: docs/planning.md)."""
+    the hull against undecided replicate fits: docs/planning.md).  The fit fits the load-cell drift in some
+    replicates of this test and not in others (0 < p_drift_fitted < 1), so each nuisance set's verdict
+    weighs its own widths: the mixture is within 5 % of the mean widths mixed with the mean probabilities."""
     sc = load_scene(DISP)
     e = predict(Protocol(sc, "displacement_max", 1.3e-4, 300, 0.03), ("no-slip",), W, MU, "large-stretch")
     b = e["by_slip"]["no-slip"]
@@ -61,8 +63,9 @@ def test_an_undecided_slip_widens_the_reported_interval():
     for name in ("work_of_adhesion", "mu_h"):
         assert b["ci95_width_undecided"][name] > b["ci95_width_decided"][name]
         mean = p * b["ci95_width_decided"][name] + (1 - p - e["p_wrong_slip"]["no-slip"]) * b["ci95_width_undecided"][name]
-        assert b["ci95_width"][name] == pytest.approx(mean, rel=0.02)
+        assert b["ci95_width"][name] == pytest.approx(mean, rel=0.05)
         assert e["ci95_width"][name] == b["ci95_width"][name]
+    assert 0.0 < b["p_drift_fitted"] < 1.0
 
 
 def test_probabilities_are_consistent():

@@ -17,14 +17,16 @@ from ..errors import AdhfitError
 from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
 from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
-from .information import Z95, jacobian, log_widths, radius_jacobian, reduced_information
+from .information import Z95, jacobian, log_widths, profile_widths_fit, radius_jacobian, reduced_information
 from .protocols import Protocol
-from .truth import OutOfDomain, loading_end, noiseless_test
+from .truth import OutOfDomain, drift_probability, loading_end, noiseless_test
 from .verdict import misfit, verdict_probabilities
 
 __all__ = ["predict", "auto_membrane", "OTHER"]
 
 OTHER = {"no-slip": "frictionless", "frictionless": "no-slip"}
+#: a nuisance set the fit uses in fewer replicates than this is left out of the prediction
+MIXTURE_FLOOR = 0.02
 
 
 def auto_membrane(truth) -> str:
@@ -41,40 +43,103 @@ def auto_membrane(truth) -> str:
     return "exact" if effect.resolved() else "large-stretch"
 
 
-def _interval(value: float, rel_se: float) -> tuple[float, float]:
+def _interval(value: float, rel_se: float, limits: tuple | None = None) -> tuple[float, float]:
+    if limits is not None:  # a profile's (asymmetric) ln limits relative to the value
+        return value * math.exp(limits[0]), value * math.exp(limits[1])
     return value * math.exp(-Z95 * rel_se), value * math.exp(Z95 * rel_se)
 
 
-def reported_widths(widths: dict, truth: dict, m, probs: dict) -> dict:
+def reported_widths(parts: list) -> dict:
     """The width the fit reports, as a distribution over its verdict (:func:`adhfit.fitting.stage.reported`):
     the true condition's interval when it is selected, the other's when that is, and otherwise the hull of
     both (the two optima differ, so an undecided verdict widens the interval).
 
+    ``parts``: ``(weight, widths, truth values, misfit, verdict probabilities)`` of each nuisance set the fit
+    may use (with and without the drift, :func:`.truth.drift_probability`), weights summing to 1.
+
     Returns, per parameter, ``decided``, ``undecided`` (the hull), ``mean`` (over the verdict's
-    probabilities: the expected width) and ``median`` widths (SI).
+    probabilities: the expected width) and ``median`` widths (SI); ``decided`` and ``undecided`` are the
+    weighted means over the parts.
     """
-    p_true, p_wrong = probs["decided"], probs["wrong"]
-    p_und = max(1.0 - p_true - p_wrong, 0.0)
     out = {}
-    for name, w in widths.items():
-        own = w["width"]
-        if m.widths is None or not math.isfinite(own):
-            out[name] = {"decided": own, "undecided": own, "mean": own, "median": own}
-            continue
-        other = m.widths[name]["width"]
-        lo_t, hi_t = _interval(truth[name], w["relative_se"])
-        lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"])
-        hull = max(hi_t, hi_w) - min(lo_t, lo_w)
-        points = sorted([(own, p_true), (other, p_wrong), (hull, p_und)])
+    for name in parts[0][1]:
+        points, dec, und = [], 0.0, 0.0
+        for weight, widths, truth, m, probs in parts:
+            w = widths[name]
+            own = w["width"]
+            p_true, p_wrong = probs["decided"], probs["wrong"]
+            p_und = max(1.0 - p_true - p_wrong, 0.0)
+            if m.widths is None or not math.isfinite(own):
+                points.append((own, weight))
+                dec, und = dec + weight * own, und + weight * own
+                continue
+            other = m.widths[name]["width"]
+            lo_t, hi_t = _interval(truth[name], w["relative_se"], w.get("interval"))
+            lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"])
+            hull = max(hi_t, hi_w) - min(lo_t, lo_w)
+            points += [(own, weight * p_true), (other, weight * p_wrong), (hull, weight * p_und)]
+            dec, und = dec + weight * own, und + weight * hull
+        points.sort()
         cum, median = 0.0, points[-1][0]
         for value, p in points:
             cum += p
             if cum >= 0.5:
                 median = value
                 break
-        out[name] = {"decided": own, "undecided": hull, "mean": p_true * own + p_wrong * other + p_und * hull,
-                     "median": median}
+        mean = sum(v * p for v, p in points) if all(math.isfinite(v) for v, _ in points) else math.inf
+        out[name] = {"decided": dec, "undecided": und, "mean": mean, "median": median}
     return out
+
+
+def _variant(protocol, slip, w, mu, x_max, chosen, radius_noise, drift, *, verdict: bool = True,
+             profile: bool = True) -> dict:
+    """One nuisance set's prediction (``drift``: fit the load-cell drift, or None: as on the noiseless curve).
+    ``verdict``: fit the other slip condition (its misfit); ``profile``: W_ad's width from the fit's profile."""
+    kw = {} if chosen == "large-stretch" else {"membrane": chosen, "points": EXACT_POINTS}
+    truth = noiseless_test(protocol, slip, w, mu, x_max, drift=drift, **kw)
+    try:
+        r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
+    except ValueError as err:
+        raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
+    J_force = J
+    if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
+        J = np.vstack([J, radius_jacobian(truth, radius_noise)])
+    widths = log_widths(J, truth.values)
+    if profile and radius_noise is None and chosen == "large-stretch" and _near_pull_off(truth, J, widths):
+        # W_ad: the fit's own profile on the noiseless curve (the pull-off term and the clamp at the turning
+        # point are not quadratic: :func:`.information.profile_widths_fit`); μh: its Fisher width agrees with
+        # its profile to 3 % and costs nothing more
+        try:
+            prof = profile_widths_fit(truth.model, truth.par, truth.sigma, truth.values, J, ("work_of_adhesion",))
+        except (AdhfitError, ValueError, np.linalg.LinAlgError):
+            prof = None
+        if prof is not None:
+            widths["work_of_adhesion"] = {**prof["work_of_adhesion"], "method": "profile",
+                                          "fisher_width": widths["work_of_adhesion"]["width"]}
+    out = {"truth": truth, "J": J, "r": r, "widths": widths}
+    if verdict:  # the verdict is the force's alone (a filmed radius only narrows the widths)
+        out["m"] = misfit(truth, OTHER[slip], r, J_force)
+        out["probs"] = verdict_probabilities(out["m"])
+    return out
+
+
+#: the W_ad profile is computed when the rows at the pull-off (its censored term and the last attached row, next
+#: to the turning point's clamp) carry this much of the Fisher information: without them the width grows by
+#: more than this factor (a deep displacement-control test: 1.01, its profile agrees with the Fisher width to
+#: 0.3 %; a shallow one: 17-80; pressure control: 60-200)
+PULL_OFF_SHARE = 1.1
+
+
+def _near_pull_off(truth, J, widths) -> bool:
+    """Whether W_ad's information comes from the rows at the pull-off, where the likelihood is not quadratic."""
+    j = truth.model.segments.i_jump
+    if truth.model.jump is None or j is None:
+        return False
+    keep = np.ones(J.shape[0], bool)
+    keep[truth.model.curve.force.size] = False  # the pull-off term (after the force rows)
+    keep[j - 1] = False
+    without = log_widths(J[keep], truth.values)["work_of_adhesion"]["width"]
+    return not without <= PULL_OFF_SHARE * widths["work_of_adhesion"]["width"]
 
 
 def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict:
@@ -82,25 +147,48 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict
     chosen = membrane
     if membrane == "auto":
         chosen = auto_membrane(truth)
-    if chosen != "large-stretch":
-        truth = noiseless_test(protocol, slip, w, mu, x_max, membrane=chosen, points=EXACT_POINTS)
-    try:
-        r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
-    except ValueError as err:
-        raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
-    if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
-        J = np.vstack([J, radius_jacobian(truth, radius_noise)])
-    widths = log_widths(J, truth.values)
-    m = misfit(truth, OTHER[slip], r, J)
-    probs = verdict_probabilities(m)
-    reported = reported_widths(widths, truth.values, m, probs)
+    main = _variant(protocol, slip, w, mu, x_max, chosen, radius_noise, None)
+    truth = main["truth"]
+    p_drift = drift_probability(truth)
+    has = "force_drift" in truth.par.names
+    # the share of replicates whose fit uses the noiseless curve's nuisance set; the other set's prediction
+    # where it is not rare.  Its verdict needs its own misfit only where the main one is marginal (else both
+    # decide, or neither); its W_ad width is its Fisher width scaled as the main set's profile scales its own
+    share = p_drift if has else 1.0 - p_drift
+    parts = [(1.0, main)]
+    if share < 1.0 - MIXTURE_FLOOR:
+        marginal = MIXTURE_FLOOR < main["probs"]["decided"] < 1.0 - MIXTURE_FLOOR
+        try:
+            alt = _variant(protocol, slip, w, mu, x_max, chosen, radius_noise, not has, verdict=marginal,
+                           profile=False)
+        except OutOfDomain:
+            alt = None
+        if alt is not None:
+            if not marginal:
+                alt["m"], alt["probs"] = main["m"], main["probs"]
+            wm = main["widths"]["work_of_adhesion"]
+            if "fisher_width" in wm and wm["fisher_width"] > 0:
+                ratio = wm["width"] / wm["fisher_width"]
+                wa = alt["widths"]["work_of_adhesion"]
+                alt["widths"]["work_of_adhesion"] = {**wa, "width": wa["width"] * ratio,
+                                                     "relative_se": wa["relative_se"] * ratio,
+                                                     "interval": tuple(ratio * np.asarray(wm["interval"]))}
+            parts = [(share, main), (1.0 - share, alt)]
+    if len(parts) == 1:
+        probs = main["probs"]
+    else:
+        probs = verdict_probabilities([v["m"] for _, v in parts], [wt for wt, _ in parts])
+    reported = reported_widths([(wt, v["widths"], v["truth"].values, v["m"], v["probs"]) for wt, v in parts])
+    widths = {name: dict(main["widths"][name], width=sum(wt * v["widths"][name]["width"] for wt, v in parts))
+              for name in main["widths"]}
+    m, J = main["m"], main["J"]
     try:
         info = reduced_information(J).tolist()
     except np.linalg.LinAlgError:
         info = None
-    return {"widths": widths, "reported": reported, "verdict": probs, "membrane": chosen, "sigma": truth.sigma, "information": info,
-            "misfit": m.to_dict(),
-            "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(r.size),
+    return {"widths": widths, "reported": reported, "verdict": probs, "membrane": chosen, "sigma": truth.sigma,
+            "information": info, "misfit": m.to_dict(), "p_drift": p_drift,
+            "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(main["r"].size),
             "other_optimum": m.values}
 
 
@@ -149,7 +237,7 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
                             "evidence": p["verdict"]["words"], "delta_bic_median": p["verdict"]["delta_bic"],
                             "delta_bic_90": p["verdict"]["delta_bic_range"], "misfit_chi2": p["verdict"]["misfit"],
                             "sigma_force": p["sigma"], "contact_radius_max": p["a_max"] * protocol.scene.membrane_radius,
-                            "nuisances": p["nuisances"], "membrane": p["membrane"],
+                            "nuisances": p["nuisances"], "p_drift_fitted": p["p_drift"], "membrane": p["membrane"],
                             "information": p["information"], "misfit": p["misfit"]}
                         for s, p in per.items()}
     if not all(math.isfinite(v) for v in entry["ci95_width"].values()):
