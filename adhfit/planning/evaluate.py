@@ -9,6 +9,7 @@ and the prediction is then made with that membrane's model.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -91,12 +92,10 @@ def reported_widths(parts: list) -> dict:
     return out
 
 
-def _variant(protocol, slip, w, mu, x_max, chosen, radius_noise, drift, *, verdict: bool = True,
-             profile: bool = True) -> dict:
-    """One nuisance set's prediction (``drift``: fit the load-cell drift, or None: as on the noiseless curve).
-    ``verdict``: fit the other slip condition (its misfit); ``profile``: W_ad's width from the fit's profile."""
-    kw = {} if chosen == "large-stretch" else {"membrane": chosen, "points": EXACT_POINTS}
-    truth = noiseless_test(protocol, slip, w, mu, x_max, drift=drift, **kw)
+def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile: bool = True) -> dict:
+    """One nuisance set's prediction on the noiseless test ``truth`` (:func:`.truth.noiseless_test`; the
+    nuisances are its ``par``).  ``verdict``: fit the other slip condition (its misfit); ``profile``: W_ad's
+    width from the fit's profile."""
     try:
         r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
     except ValueError as err:
@@ -147,8 +146,9 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict
     chosen = membrane
     if membrane == "auto":
         chosen = auto_membrane(truth)
-    main = _variant(protocol, slip, w, mu, x_max, chosen, radius_noise, None)
-    truth = main["truth"]
+    if chosen != "large-stretch":
+        truth = noiseless_test(protocol, slip, w, mu, x_max, membrane=chosen, points=EXACT_POINTS)
+    main = _variant(truth, slip, chosen, radius_noise)
     p_drift = drift_probability(truth)
     has = "force_drift" in truth.par.names
     # the share of replicates whose fit uses the noiseless curve's nuisance set; the other set's prediction
@@ -158,9 +158,9 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict
     parts = [(1.0, main)]
     if share < 1.0 - MIXTURE_FLOOR:
         marginal = MIXTURE_FLOOR < main["probs"]["decided"] < 1.0 - MIXTURE_FLOOR
-        try:
-            alt = _variant(protocol, slip, w, mu, x_max, chosen, radius_noise, not has, verdict=marginal,
-                           profile=False)
+        try:  # the same curve and model, the other nuisance set
+            flipped = dataclasses.replace(truth, par=dataclasses.replace(truth.par, fit_force_drift=not has))
+            alt = _variant(flipped, slip, chosen, radius_noise, verdict=marginal, profile=False)
         except OutOfDomain:
             alt = None
         if alt is not None:
