@@ -1,7 +1,9 @@
 """One protocol's prediction: interval widths, slip-verdict probabilities, domain and membrane model.
 
 For each true slip condition the noiseless curve (:mod:`.truth`) gives the Fisher widths
-(:mod:`.information`) and the other condition's misfit (:mod:`.verdict`).  The membrane model is the
+(:mod:`.information`; W_ad's from the fit's own profile where the rows at pull-off carry its information)
+and the other condition's misfit (:mod:`.verdict`), for the nuisance set the fit uses on it and, weighted by
+how often the fit uses each (:func:`.truth.drift_probability`), for the other one.  The membrane model is the
 scene's; under ``auto`` it is the one the fit would choose at the truth (the fit's own rule,
 :func:`adhfit.fitting.membrane.approximation_effect`: the exact membrane when the large-stretch
 force is off by more than half σ at some row, or shifts W_ad or μh by more than half a standard error),
