@@ -20,7 +20,8 @@ from ..errors import AdhfitError
 from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
 from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
-from .information import Z95, jacobian, log_widths, profile_widths_fit, radius_jacobian, reduced_information
+from .information import (Z95, jacobian, log_widths, profile_widths_fit, radius_jacobian, reduced_information,
+                          with_drift_flipped)
 from .protocols import Protocol
 from .truth import OutOfDomain, drift_probability, loading_end, noiseless_test
 from .verdict import misfit, verdict_probabilities
@@ -94,17 +95,26 @@ def reported_widths(parts: list) -> dict:
     return out
 
 
-def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile: bool = True) -> dict:
+def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile: bool = True,
+             flip_of: dict | None = None) -> dict:
     """One nuisance set's prediction on the noiseless test ``truth`` (:func:`.truth.noiseless_test`; the
     nuisances are its ``par``).  ``verdict``: fit the other slip condition (its misfit); ``profile``: W_ad's
-    width from the fit's profile."""
-    try:
-        r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
-    except ValueError as err:
-        raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
-    J_force = J
-    if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
-        J = np.vstack([J, radius_jacobian(truth, radius_noise)])
+    width from the fit's profile; ``flip_of``: the other nuisance set's variant on the same curve, whose
+    Jacobian gives this one's by the drift's column (:func:`.information.with_drift_flipped`)."""
+    if flip_of is not None:
+        r = flip_of["r"]
+        J_force = with_drift_flipped(truth.model, flip_of["truth"].par, truth.sigma, truth.values, flip_of["J_force"])
+        J = J_force
+        if radius_noise is not None:
+            J = with_drift_flipped(truth.model, flip_of["truth"].par, truth.sigma, truth.values, flip_of["J"])
+    else:
+        try:
+            r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
+        except ValueError as err:
+            raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
+        J_force = J
+        if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
+            J = np.vstack([J, radius_jacobian(truth, radius_noise)])
     widths = log_widths(J, truth.values)
     if profile and radius_noise is None and chosen == "large-stretch" and _near_pull_off(truth, J, widths):
         # W_ad: the fit's own profile on the noiseless curve (the pull-off term and the clamp at the turning
@@ -117,7 +127,7 @@ def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile
         if prof is not None:
             widths["work_of_adhesion"] = {**prof["work_of_adhesion"], "method": "profile",
                                           "fisher_width": widths["work_of_adhesion"]["width"]}
-    out = {"truth": truth, "J": J, "r": r, "widths": widths}
+    out = {"truth": truth, "J": J, "J_force": J_force, "r": r, "widths": widths}
     if verdict:  # the verdict is the force's alone (a filmed radius only narrows the widths)
         out["m"] = misfit(truth, OTHER[slip], r, J_force)
         out["probs"] = verdict_probabilities(out["m"])
@@ -162,7 +172,7 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict
         marginal = MIXTURE_FLOOR < main["probs"]["decided"] < 1.0 - MIXTURE_FLOOR
         try:  # the same curve and model, the other nuisance set
             flipped = dataclasses.replace(truth, par=dataclasses.replace(truth.par, fit_force_drift=not has))
-            alt = _variant(flipped, slip, chosen, radius_noise, verdict=marginal, profile=False)
+            alt = _variant(flipped, slip, chosen, radius_noise, verdict=marginal, profile=False, flip_of=main)
         except OutOfDomain:
             alt = None
         if alt is not None:

@@ -32,7 +32,7 @@ from ..fitting.objective import Values
 from ..fitting.starts import Start
 
 __all__ = ["internal", "residual_at", "jacobian", "radius_jacobian", "log_widths", "reduced_information", "widths_from_information",
-           "pull_off_curvature", "pull_off_slopes", "profile_widths_fit", "Z95", "STEP"]
+           "pull_off_curvature", "pull_off_slopes", "with_drift_flipped", "profile_widths_fit", "Z95", "STEP"]
 
 #: two-sided 95 % normal quantile
 Z95 = 1.959963984540054
@@ -124,6 +124,29 @@ def jacobian(model, par, sigma: float, values: dict, *, raw_pull_off: bool = Fal
             g.append((_turning_point(model, par, names, up) - _turning_point(model, par, names, down)) / (2 * STEP))
         J[-1] = math.sqrt(k) * np.array(g) / gap[2]
     return r0, J, names
+
+
+def with_drift_flipped(model, par, sigma: float, values: dict, J: np.ndarray) -> np.ndarray:
+    """:func:`jacobian` of the same residual with the load-cell drift's column added (``par`` without it) or
+    dropped (``par`` with it), from ``J`` of ``par``: at the truth the drift is 0, so the residual and the
+    other columns are the same, and the pull-off row's drift entry is 0 (the turning point does not depend on
+    the load cell).  Only an added column costs two residual evaluations.  ``J`` may carry rows of a filmed
+    radius below the force residual's (their drift entries are 0 too)."""
+    import dataclasses  # noqa: PLC0415
+    if par.fit_force_drift:  # the drift is the last parameter (Parametrisation.names)
+        return J[:, :-1].copy()
+    flipped = dataclasses.replace(par, fit_force_drift=True)
+    names, theta = internal(flipped, values)
+    at = residual_at(model, flipped, sigma)
+    up, down = theta.copy(), theta.copy()
+    up[-1] += STEP
+    down[-1] -= STEP
+    col = np.zeros(J.shape[0])
+    ru, rd = at(names, up), at(names, down)
+    col[: ru.size] = (ru - rd) / (2.0 * STEP)
+    if model.jump is not None:
+        col[ru.size - 1] = 0.0
+    return np.column_stack([J, col])
 
 
 def log_widths(J: np.ndarray, values: dict) -> dict:

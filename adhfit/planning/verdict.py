@@ -29,7 +29,7 @@ import numpy as np
 from ..fitting.lsq import COARSE_TOL, minimise, residual_function
 from ..fitting.selection import DECISIVE, POSITIVE, STRONG
 from ..fitting.starts import Start
-from .information import jacobian, log_widths, pull_off_slopes
+from .information import jacobian, log_widths, pull_off_curvature, pull_off_slopes
 
 __all__ = ["misfit", "Misfit", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
            "WORDS"]
@@ -84,11 +84,19 @@ def _hat_overlap(J1: np.ndarray, J2: np.ndarray) -> float:
     return float(np.sum((q1.T @ q2) ** 2))
 
 
-def _covariance_widths(model, par, sigma: float, values: dict, inflate: float) -> dict:
+def _covariance_widths(model, par, sigma: float, values: dict, inflate: float, J: np.ndarray | None = None) -> dict:
     """The other condition's covariance interval widths: the median over where its turning point falls in the
     pull-off gap (the pull-off row's slope goes from ~0 in the middle to its largest at the edges, and the
-    W_ad interval with it)."""
-    J = jacobian(model, par, sigma, values, raw_pull_off=True)[1] / inflate
+    W_ad interval with it).
+
+    ``J``: :func:`.information.jacobian` at ``values`` (its pull-off row the quadratic one), reused: only the
+    pull-off row differs from the raw Jacobian, by the factor sqrt(k) (:func:`.information.pull_off_curvature`)."""
+    if J is None:
+        J = jacobian(model, par, sigma, values, raw_pull_off=True)[1] / inflate
+    else:
+        J = J / inflate
+        if model.jump is not None:
+            J[-1] /= math.sqrt(pull_off_curvature(model.jump))
     gap = model.jump
     if gap is None:
         return log_widths(J, values)
@@ -120,7 +128,7 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
         # the covariance: the pull-off row's own derivative), its σ estimate inflated by the misfit; the hull of
         # an undecided verdict takes it in (:func:`adhfit.fitting.stage.reported`)
         inflate = math.sqrt(1.0 + lam / max(r_true.size - k, 1))
-        other_widths = _covariance_widths(model, par, sigma, values, inflate)
+        other_widths = _covariance_widths(model, par, sigma, values, inflate, J_w)
         # the noise enters the force rows only (not the pull-off term, the last row when there is one)
         g = r_true.size - (truth.model.jump is not None)
         lin = 4.0 * float(np.sum((r_w[:g] - r_true[:g]) ** 2))
