@@ -175,3 +175,39 @@ def test_contact_radius_end_is_programmed_as_a_pressure(tmp_path, capsys):
     assert e["settings"]["a_max"] == 0.5 and e["settings"]["control_max"] > 0
     scene = load_scene(tmp_path / "p" / "scene.toml")
     assert scene.pressure_max == pytest.approx(e["settings"]["control_max"], rel=1e-8)
+
+
+def test_a_map_between_its_sub_grid_agrees_with_the_full_computation():
+    """A map's axis of >= 8 values is computed in full on every other value; the cells between take P(drift
+    fitted) from their neighbours where those agree
+    (adhfit.planning.api._hint).  They must predict what the full computation predicts, and plan.json must
+    say which cell used what."""
+    plan = adhfit.plan(DISP, work_of_adhesion=W, mu_h=MU, noise=0.03, delta_max="0.2 mm", membrane="large-stretch",
+                       vary="displacement_max=0.09:0.16mm:8")
+    comp = plan.to_dict()["computation"]
+    assert comp["sub_grid_cells"] == 5 and len(comp["sub_grid"][0]) == 5
+    sc = load_scene(DISP)
+    between = [i for i in (1, 3, 5) if plan.protocols[i]["in_domain"]]
+    used = 0
+    assert between
+    for i in between:
+        e = plan.protocols[i]
+        full = predict(Protocol(sc, "displacement_max", e["settings"]["displacement_max"], 300, 0.03),
+                       ("no-slip", "frictionless"), W, MU, "large-stretch")
+        for s in ("no-slip", "frictionless"):
+            b = e["by_slip"][s]
+            assert b["p_drift_method"] in ("noisy copies", "interpolated")
+            assert b["w_ad_width_method"] in ("fisher", "profile")  # never interpolated: it jumps between cells
+            used += b["p_drift_method"] == "interpolated"
+            assert e["p_slip_decided"][s] == pytest.approx(full["p_slip_decided"][s], abs=0.1)
+            assert b["ci95_width"]["work_of_adhesion"] == pytest.approx(full["by_slip"][s]["ci95_width"]["work_of_adhesion"],
+                                                                         rel=0.1)
+            assert b["misfit"]["lam"] == pytest.approx(full["by_slip"][s]["misfit"]["lam"], rel=1e-9)
+            if b["p_drift_method"] == "interpolated":  # where it was, it is close to what its noisy copies say
+                assert b["p_drift_fitted"] == pytest.approx(full["by_slip"][s]["p_drift_fitted"], abs=0.15)
+    assert used > 0  # the cells between did use their neighbours
+    counts = comp["predictions"]
+    assert sum(counts["p_drift"].values()) == 2 * sum(e["in_domain"] for e in plan.protocols)
+    if plan.recommended is not None:  # the recommended protocol is computed in full
+        for b in plan.protocols[plan.recommended]["by_slip"].values():
+            assert b["p_drift_method"] == "noisy copies"

@@ -99,8 +99,8 @@ def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile
              flip_of: dict | None = None) -> dict:
     """One nuisance set's prediction on the noiseless test ``truth`` (:func:`.truth.noiseless_test`; the
     nuisances are its ``par``).  ``verdict``: fit the other slip condition (its misfit); ``profile``: W_ad's
-    width from the fit's profile; ``flip_of``: the other nuisance set's variant on the same curve, whose
-    Jacobian gives this one's by the drift's column (:func:`.information.with_drift_flipped`)."""
+    width from the fit's profile where the pull-off rows carry its information; ``flip_of``: the other nuisance set's variant on the same curve, whose Jacobian
+    gives this one's by the drift's column (:func:`.information.with_drift_flipped`)."""
     if flip_of is not None:
         r = flip_of["r"]
         J_force = with_drift_flipped(truth.model, flip_of["truth"].par, truth.sigma, truth.values, flip_of["J_force"])
@@ -116,17 +116,19 @@ def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile
         if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
             J = np.vstack([J, radius_jacobian(truth, radius_noise)])
     widths = log_widths(J, truth.values)
+    widths["work_of_adhesion"]["method"] = "fisher"
     if profile and radius_noise is None and chosen == "large-stretch" and _near_pull_off(truth, J, widths):
         # W_ad: the fit's own profile on the noiseless curve (the pull-off term and the clamp at the turning
         # point are not quadratic: :func:`.information.profile_widths_fit`); μh: its Fisher width agrees with
         # its profile to 3 % and costs nothing more
+        fisher = widths["work_of_adhesion"]
         try:
             prof = profile_widths_fit(truth.model, truth.par, truth.sigma, truth.values, J, ("work_of_adhesion",))
         except (AdhfitError, ValueError, np.linalg.LinAlgError):
             prof = None
         if prof is not None:
             widths["work_of_adhesion"] = {**prof["work_of_adhesion"], "method": "profile",
-                                          "fisher_width": widths["work_of_adhesion"]["width"]}
+                                          "fisher_width": fisher["width"], "fisher_relative_se": fisher["relative_se"]}
     out = {"truth": truth, "J": J, "J_force": J_force, "r": r, "widths": widths}
     if verdict:  # the verdict is the force's alone (a filmed radius only narrows the widths)
         out["m"] = misfit(truth, OTHER[slip], r, J_force)
@@ -141,6 +143,16 @@ def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile
 PULL_OFF_SHARE = 1.1
 
 
+def profile_factors(widths: dict) -> tuple | None:
+    """W_ad's profile limits over its Fisher half-width 1.96 se (lower, upper; both positive), or None when its
+    width is the Fisher one (plan.json ``by_slip``: how far the profile departs from the Fisher interval)."""
+    w = widths["work_of_adhesion"]
+    if w.get("method") != "profile" or not w.get("fisher_relative_se"):
+        return None
+    h = Z95 * w["fisher_relative_se"]
+    return -w["interval"][0] / h, w["interval"][1] / h
+
+
 def _near_pull_off(truth, J, widths) -> bool:
     """Whether W_ad's information comes from the rows at the pull-off, where the likelihood is not quadratic."""
     j = truth.model.segments.i_jump
@@ -153,15 +165,19 @@ def _near_pull_off(truth, J, widths) -> bool:
     return not without <= PULL_OFF_SHARE * widths["work_of_adhesion"]["width"]
 
 
-def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict:
+def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None, hint: dict | None = None) -> dict:
     truth = noiseless_test(protocol, slip, w, mu, x_max)
     chosen = membrane
     if membrane == "auto":
         chosen = auto_membrane(truth)
     if chosen != "large-stretch":
         truth = noiseless_test(protocol, slip, w, mu, x_max, membrane=chosen, points=EXACT_POINTS)
+    hint = hint or {}
     main = _variant(truth, slip, chosen, radius_noise)
-    p_drift = drift_probability(truth)
+    if hint.get("p_drift") is not None:
+        p_drift, drift_method = float(hint["p_drift"]), "interpolated"
+    else:
+        p_drift, drift_method = drift_probability(truth), "noisy copies"
     has = "force_drift" in truth.par.names
     # the share of replicates whose fit uses the noiseless curve's nuisance set; the other set's prediction
     # where it is not rare.  Its verdict needs its own misfit only where the main one is marginal (else both
@@ -199,13 +215,14 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict
     except np.linalg.LinAlgError:
         info = None
     return {"widths": widths, "reported": reported, "verdict": probs, "membrane": chosen, "sigma": truth.sigma,
-            "information": info, "misfit": m.to_dict(), "p_drift": p_drift,
+            "information": info, "misfit": m.to_dict(), "p_drift": p_drift, "p_drift_method": drift_method,
+            "w_method": main["widths"]["work_of_adhesion"]["method"], "profile_factors": profile_factors(main["widths"]),
             "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(main["r"].size),
             "other_optimum": m.values}
 
 
 def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str = "auto",
-            radius_noise: float | None = None) -> dict:
+            radius_noise: float | None = None, hints: dict | None = None) -> dict:
     """The plan.json entry of one protocol (docs/contracts.md A8) plus the details behind it.
 
     Parameters
@@ -219,6 +236,10 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
     radius_noise : float, optional
         A filmed contact radius with this noise (a fraction of the largest contact radius): its block joins
         the widths' information (the slip verdict stays force-only: a lower bound on its P).
+    hints : dict, optional
+        slip -> ``{"p_drift": P or None}``: P(drift fitted) interpolated from a map's sub-grid
+        (:func:`.api.plan`), used instead of its noisy copies.  ``by_slip`` says
+        which method each cell used (``w_ad_width_method``, ``p_drift_method``).
     """
     entry = {"settings": protocol.settings(), "ci95_width": {"work_of_adhesion": None, "mu_h": None},
              "p_slip_decided": {s: None for s in slips}, "p_wrong_slip": {s: None for s in slips},
@@ -227,7 +248,7 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
         if protocol.invalid:
             raise OutOfDomain(protocol.invalid[2])
         x_max = loading_end(protocol, slips[0], w, mu)
-        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane, radius_noise) for s in slips}
+        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane, radius_noise, (hints or {}).get(s)) for s in slips}
     except OutOfDomain as err:
         entry["why_not"] = str(err)
         return entry
@@ -249,7 +270,9 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
                             "evidence": p["verdict"]["words"], "delta_bic_median": p["verdict"]["delta_bic"],
                             "delta_bic_90": p["verdict"]["delta_bic_range"], "misfit_chi2": p["verdict"]["misfit"],
                             "sigma_force": p["sigma"], "contact_radius_max": p["a_max"] * protocol.scene.membrane_radius,
-                            "nuisances": p["nuisances"], "p_drift_fitted": p["p_drift"], "membrane": p["membrane"],
+                            "nuisances": p["nuisances"], "p_drift_fitted": p["p_drift"], "p_drift_method": p["p_drift_method"],
+                            "w_ad_width_method": p["w_method"], "w_ad_profile_factors": p["profile_factors"],
+                            "membrane": p["membrane"], "other_optimum": p["other_optimum"],
                             "information": p["information"], "misfit": p["misfit"]}
                         for s, p in per.items()}
     if not all(math.isfinite(v) for v in entry["ci95_width"].values()):
