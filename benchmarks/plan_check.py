@@ -87,17 +87,31 @@ def replicate(job) -> dict:
     for key, par in (("w", "work_of_adhesion"), ("mu", "mu_h")):
         ci = r.parameters[par].ci95
         out[key] = (ci[1] - ci[0]) if ci is not None and None not in ci else None
+        out[f"{key}_ci"] = None if ci is None else [None if c is None else float(c) for c in ci]
+        out[f"{key}_value"] = r.parameters[par].value
+        # coverage: the reported interval (a missing bound is open on that side) holds the truth
+        truth = W_AD if key == "w" else MU_H
+        out[f"{key}_covers"] = None if ci is None else bool((ci[0] is None or ci[0] <= truth) and
+                                                            (ci[1] is None or truth <= ci[1]))
     return out
 
 
-def run(protocols, replicates: int, workers: int) -> list[dict]:
+def run(protocols, replicates: int, workers: int, seed: int = 1000, raw: list | None = None,
+        distinct: bool = False) -> list[dict]:
+    """Predict and fit ``replicates`` curves per protocol.  Replicate k has seed ``seed + k`` in every protocol
+    (the same standard-normal noise, scaled): the two slips of one test then see the same noise, and their
+    verdict rates' errors are anti-correlated (the wrong fit's misfit directions are nearly opposite).
+    ``distinct``: seed ``seed + 1000 i + k`` for the i-th protocol of :data:`PROTOCOLS` (independent)."""
     preds = {p[0]: predict(p) for p in protocols}
-    jobs = [(p, preds[p[0]]["x_max"], 1000 + k) for p in protocols for k in range(replicates)]
+    jobs = [(p, preds[p[0]]["x_max"], seed + (1000 * PROTOCOLS.index(p) if distinct else 0) + k)
+            for p in protocols for k in range(replicates)]
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
             results = pool.map(replicate, jobs, chunksize=1)
     else:
         results = [replicate(j) for j in jobs]
+    if raw is not None:
+        raw.extend(results)
     rows = []
     for p in protocols:
         name, slip = p[0], p[4]
@@ -111,6 +125,13 @@ def run(protocols, replicates: int, workers: int) -> list[dict]:
                "noise": p[5], "end": f"{p[2]} = {p[3]:g}", "n": n, "errors": len(rs) - n,
                "p_pred": pred["p"], "p_obs": decided, "p_se": math.sqrt(max(decided * (1 - decided), 0.25 / n) / n),
                "wrong_pred": pred["wrong"], "wrong_obs": wrong}
+        for key in ("w", "mu"):  # coverage of the truth by the reported 95 % interval (binomial se)
+            cov = [r[f"{key}_covers"] for r in ok if r[f"{key}_covers"] is not None]
+            c = sum(cov) / max(len(cov), 1)
+            row[f"{key}_coverage"], row[f"{key}_coverage_n"] = c, len(cov)
+            row[f"{key}_coverage_se"] = math.sqrt(max(c * (1 - c), 0.05 * 0.95) / max(len(cov), 1))
+            dec = [r[f"{key}_covers"] for r in ok if r[f"{key}_covers"] is not None and r["selected"] is not None]
+            row[f"{key}_coverage_decided"] = (sum(dec), len(dec))
         checks = []
         for key in ("w", "mu"):
             widths = [r[key] for r in ok if r[key] is not None]
@@ -145,8 +166,8 @@ def _cls(r, key) -> str:
 def table(rows: list[dict]) -> str:
     head = ("| protocol | control | true slip | noise | loading end | fits | W_ad width pred / median [J/m²] | ratio | "
             "W_ad ratio by verdict (fits) | μh width pred / median [N/m] | ratio | μh ratio by verdict (fits) | "
-            "P(decided) pred / obs ± se | P(wrong) pred / obs | pass |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+            "P(decided) pred / obs ± se | P(wrong) pred / obs | W_ad / μh coverage ± se (intervals) | pass |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     lines = []
     for r in rows:
         lines.append(f"| {r['name']} | {r['control']} | {r['slip']} | {100 * r['noise']:g} % | {r['end']} | {r['n']}"
@@ -155,6 +176,8 @@ def table(rows: list[dict]) -> str:
                      f"{r['mu_obs']:.3g} | {r['mu_ratio']:.2f} | {_cls(r, 'mu')} | "
                      f"{r['p_pred']:.2f} / {r['p_obs']:.2f} ± {r['p_se']:.2f} | "
                      f"{r['wrong_pred']:.3f} / {r['wrong_obs']:.3f} | "
+                     f"{r['w_coverage']:.2f} ± {r['w_coverage_se']:.2f} / {r['mu_coverage']:.2f} ± {r['mu_coverage_se']:.2f} "
+                     f"({r['w_coverage_n']}) | "
                      f"{'yes' if r['pass_width'] and r['pass_p'] else ('width' if not r['pass_width'] else 'P') + ' off'} |")
     return head + "\n".join(lines) + "\n"
 
@@ -165,9 +188,21 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--quick", action="store_true", help="two protocols (CI)")
     ap.add_argument("--out", type=Path, default=None, help="write the table (Markdown) here")
+    ap.add_argument("--only", nargs="+", default=None, help="these protocols only (names)")
+    ap.add_argument("--seed", type=int, default=1000, help="first replicate's seed (then +1 each)")
+    ap.add_argument("--json", type=Path, default=None, help="write every replicate's fit summary here")
+    ap.add_argument("--distinct-seeds", action="store_true",
+                    help="independent noise per protocol (seed + 1000 x its index + k), not the same seeds in each")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
-    rows = run(QUICK if args.quick else PROTOCOLS, args.replicates, args.workers)
+    protocols = QUICK if args.quick else PROTOCOLS
+    if args.only:
+        protocols = [p for p in PROTOCOLS if p[0] in args.only]
+    raw: list = []
+    rows = run(protocols, args.replicates, args.workers, seed=args.seed, raw=raw, distinct=args.distinct_seeds)
+    if args.json is not None:
+        import json  # noqa: PLC0415
+        args.json.write_text(json.dumps({"rows": rows, "replicates": raw}, indent=1, default=str), encoding="utf-8")
     text = table(rows)
     n_pass = sum(r["pass_width"] and r["pass_p"] for r in rows)
     summary = (f"\n{n_pass} of {len(rows)} protocols pass (widths: the predicted width of each verdict class within 20 % "

@@ -19,10 +19,10 @@ PATHS = sorted(NOTEBOOKS.glob("*.ipynb"))
 CELL_TIMEOUT = 300  # s per cell: generous for loaded CI machines; FAST cells take seconds
 
 
-def test_the_five_notebooks_are_there():
+def test_the_seven_notebooks_are_there():
     names = [p.stem for p in PATHS]
     for prefix in ("01_forward_model_tour", "02_fit_least_squares", "03_mcmc_uncertainty",
-                   "04_parameter_recovery", "05_runtime_vs_error"):
+                   "04_parameter_recovery", "05_runtime_vs_error", "06_planning", "07_exact_membrane"):
         assert prefix in names
 
 

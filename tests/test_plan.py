@@ -21,13 +21,15 @@ PRES = SAMPLES / "flat_pressure_no-slip" / "scene.toml"
 W, MU = 0.3, 1.5
 
 
-@pytest.mark.parametrize("scene, end, value", [(DISP, "displacement_max", 4e-4), (PRES, "pressure_max", 1200.0)],
-                         ids=["displacement", "pressure"])
+@pytest.mark.parametrize("scene, end, value", [(DISP, "displacement_max", 4e-4), (DISP, "displacement_max", 1.3e-4),
+                                               (PRES, "pressure_max", 1200.0)],
+                         ids=["displacement", "displacement-shallow", "pressure"])
 def test_widths_match_the_fits_own_interval_on_the_noiseless_curve(scene, end, value):
     """Independent check: the fit (profiles, the pull-off term, its own nuisances) of the noiseless curve with
     the noise σ given reports the interval a noisy replicate reports on average (its χ² surface is the
-    expected one).  The plan's Fisher widths must agree with it: 15 % (measured: 0.6 % and 9 %; the pull-off
-    term's quadratic stand-in is the approximate part under pressure control)."""
+    expected one).  The plan's widths must agree with it: 15 %.  The shallow test is the one where the
+    likelihood at pull-off is not quadratic: its Fisher W_ad width is 1.6x the fit's profile (and the noisy
+    replicates'), so only the plan's own profile there passes."""
     sc = load_scene(scene)
     e = predict(Protocol(sc, end, value, 300, 0.02), ("no-slip",), W, MU, "large-stretch")
     curve, _ = synthetic_curve(sc, "no-slip", work_of_adhesion=W, mu_h=MU, x_max=value, rows=300, noise=0.0,
@@ -53,7 +55,9 @@ def test_misfit_is_the_fits_own_delta_bic_on_the_noiseless_curve():
 def test_an_undecided_slip_widens_the_reported_interval():
     """Undecided, the fit reports the hull of both conditions' intervals (adhfit.fitting.stage.reported): the
     expected width mixes the decided width and the hull with the verdict's probabilities (the benchmark checks
-    the hull against undecided replicate fits: docs/planning.md)."""
+    the hull against undecided replicate fits: docs/planning.md).  The fit fits the load-cell drift in some
+    replicates of this test and not in others (0 < p_drift_fitted < 1), so each nuisance set's verdict
+    weighs its own widths: the mixture is within 5 % of the mean widths mixed with the mean probabilities."""
     sc = load_scene(DISP)
     e = predict(Protocol(sc, "displacement_max", 1.3e-4, 300, 0.03), ("no-slip",), W, MU, "large-stretch")
     b = e["by_slip"]["no-slip"]
@@ -61,8 +65,9 @@ def test_an_undecided_slip_widens_the_reported_interval():
     for name in ("work_of_adhesion", "mu_h"):
         assert b["ci95_width_undecided"][name] > b["ci95_width_decided"][name]
         mean = p * b["ci95_width_decided"][name] + (1 - p - e["p_wrong_slip"]["no-slip"]) * b["ci95_width_undecided"][name]
-        assert b["ci95_width"][name] == pytest.approx(mean, rel=0.02)
+        assert b["ci95_width"][name] == pytest.approx(mean, rel=0.05)
         assert e["ci95_width"][name] == b["ci95_width"][name]
+    assert 0.0 < b["p_drift_fitted"] < 1.0
 
 
 def test_probabilities_are_consistent():
@@ -170,3 +175,39 @@ def test_contact_radius_end_is_programmed_as_a_pressure(tmp_path, capsys):
     assert e["settings"]["a_max"] == 0.5 and e["settings"]["control_max"] > 0
     scene = load_scene(tmp_path / "p" / "scene.toml")
     assert scene.pressure_max == pytest.approx(e["settings"]["control_max"], rel=1e-8)
+
+
+def test_a_map_between_its_sub_grid_agrees_with_the_full_computation():
+    """A map's axis of >= 8 values is computed in full on every other value; the cells between take P(drift
+    fitted) from their neighbours where those agree
+    (adhfit.planning.api._hint).  They must predict what the full computation predicts, and plan.json must
+    say which cell used what."""
+    plan = adhfit.plan(DISP, work_of_adhesion=W, mu_h=MU, noise=0.03, delta_max="0.2 mm", membrane="large-stretch",
+                       vary="displacement_max=0.09:0.16mm:8")
+    comp = plan.to_dict()["computation"]
+    assert comp["sub_grid_cells"] == 5 and len(comp["sub_grid"][0]) == 5
+    sc = load_scene(DISP)
+    between = [i for i in (1, 3, 5) if plan.protocols[i]["in_domain"]]
+    used = 0
+    assert between
+    for i in between:
+        e = plan.protocols[i]
+        full = predict(Protocol(sc, "displacement_max", e["settings"]["displacement_max"], 300, 0.03),
+                       ("no-slip", "frictionless"), W, MU, "large-stretch")
+        for s in ("no-slip", "frictionless"):
+            b = e["by_slip"][s]
+            assert b["p_drift_method"] in ("noisy copies", "interpolated")
+            assert b["w_ad_width_method"] in ("fisher", "profile")  # never interpolated: it jumps between cells
+            used += b["p_drift_method"] == "interpolated"
+            assert e["p_slip_decided"][s] == pytest.approx(full["p_slip_decided"][s], abs=0.1)
+            assert b["ci95_width"]["work_of_adhesion"] == pytest.approx(full["by_slip"][s]["ci95_width"]["work_of_adhesion"],
+                                                                         rel=0.1)
+            assert b["misfit"]["lam"] == pytest.approx(full["by_slip"][s]["misfit"]["lam"], rel=1e-9)
+            if b["p_drift_method"] == "interpolated":  # where it was, it is close to what its noisy copies say
+                assert b["p_drift_fitted"] == pytest.approx(full["by_slip"][s]["p_drift_fitted"], abs=0.15)
+    assert used > 0  # the cells between did use their neighbours
+    counts = comp["predictions"]
+    assert sum(counts["p_drift"].values()) == 2 * sum(e["in_domain"] for e in plan.protocols)
+    if plan.recommended is not None:  # the recommended protocol is computed in full
+        for b in plan.protocols[plan.recommended]["by_slip"].values():
+            assert b["p_drift_method"] == "noisy copies"

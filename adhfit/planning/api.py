@@ -8,10 +8,13 @@ test series (``global_k``) the best set of k pressures or gaps is chosen (:mod:`
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from ..errors import InputError
 from ..units import parse_quantity
@@ -53,6 +56,7 @@ class Plan:
     inputs: dict
     series: dict | None = None
     base: Any = field(default=None, repr=False, compare=False)
+    computation: dict | None = None
 
     def to_dict(self) -> dict:
         """plan.json: the A8 keys, plus ``axes``, ``inputs`` and ``series``."""
@@ -60,6 +64,8 @@ class Plan:
                "axes": {k: [float(v) for v in vals] for k, vals in self.axes.items()}, "inputs": self.inputs}
         if self.series is not None:
             out["series"] = self.series
+        if self.computation is not None:
+            out["computation"] = self.computation
         return out
 
     def protocol(self, index: int) -> Protocol:
@@ -135,10 +141,11 @@ def _slips(slip: str) -> tuple:
 
 
 def _run(protocols: list, slips: tuple, w: float, mu: float, membrane: str, workers: int,
-         radius_noise: float | None = None) -> list[dict]:
+         radius_noise: float | None = None, hints: list | None = None) -> list[dict]:
     from .evaluate import predict  # noqa: PLC0415
+    hints = hints or [None] * len(protocols)
     if workers <= 1 or len(protocols) < 4:
-        return [predict(p, slips, w, mu, membrane, radius_noise) for p in protocols]
+        return [predict(p, slips, w, mu, membrane, radius_noise, h) for p, h in zip(protocols, hints)]
     import concurrent.futures as cf  # noqa: PLC0415
     import multiprocessing  # noqa: PLC0415
     ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
@@ -146,7 +153,94 @@ def _run(protocols: list, slips: tuple, w: float, mu: float, membrane: str, work
         chunk = max(1, len(protocols) // (4 * workers))
         return list(pool.map(predict, protocols, [slips] * len(protocols), [w] * len(protocols),
                              [mu] * len(protocols), [membrane] * len(protocols), [radius_noise] * len(protocols),
-                             chunksize=chunk))
+                             hints, chunksize=chunk))
+
+
+#: an axis of a map with at least this many values is computed in full on every other value (and its last)
+#: only; the cells between take P(drift fitted) interpolated from those where they agree (:data:`DRIFT_AGREE`)
+SUBGRID_MIN = 8
+
+
+def _coarse(k: int) -> list[int]:
+    return sorted(set(range(0, k, 2)) | {k - 1}) if k >= SUBGRID_MIN else list(range(k))
+
+
+def _bracket(i: int, coarse: list[int]) -> list[tuple[int, float]]:
+    """The coarse indices around ``i`` and their linear weights."""
+    if i in coarse:
+        return [(i, 1.0)]
+    hi = next(c for c in coarse if c > i)
+    lo = max(c for c in coarse if c < i)
+    t = (i - lo) / (hi - lo)
+    return [(lo, 1.0 - t), (hi, t)]
+
+#: a cell between the sub-grid's takes the interpolated P(drift fitted) only where its neighbours' agree within
+#: this (absolute); elsewhere it computes it from noisy copies (P(drift) jumps where the rows before contact cross
+#: 5).  On the 20 x 20 map of benchmarks/plan_map_time.py: 304 of 676 predictions interpolated, P(drift) off by at
+#: most 0.10, P(decided) by 0.015, the W_ad width by 2 % (docs/planning.md, "Cost").
+#:
+#: Not interpolated, measured on that map: W_ad's profile factors (:func:`.evaluate.profile_factors`; they jump
+#: where the turning point crosses a row: even where all four neighbours agreed within 10 %, 3 of 33 cells were
+#: off by 18-89 %), and the other slip's fit started at the neighbours' optimum (its χ² has several minima: λ
+#: more than 5 % off in 82 of 676 predictions, P(decided) up to 0.56).
+DRIFT_AGREE = 0.1
+
+
+def _hint(entries: dict, neighbours: list, slips: tuple) -> dict:
+    """slip -> the interpolated ``p_drift`` of a cell between the sub-grid's ``neighbours`` ((flat index,
+    weight)); None where its neighbours do not agree (:data:`DRIFT_AGREE`) or leave the domain: the cell computes
+    it from noisy copies."""
+    if not all(entries[i]["in_domain"] for i, _ in neighbours):
+        return {}
+    tot = sum(wt for _, wt in neighbours)
+    out = {}
+    for s in slips:
+        bs = [(entries[i]["by_slip"][s], wt / tot) for i, wt in neighbours]
+        drift = [b["p_drift_fitted"] for b, _ in bs]
+        hint = {"p_drift": None}
+        if max(drift) - min(drift) <= DRIFT_AGREE:
+            hint["p_drift"] = float(sum(b["p_drift_fitted"] * wt for b, wt in bs))
+        out[s] = hint
+    return out
+
+
+def _run_map(protocols: list, axes: list, slips: tuple, w: float, mu: float, membrane: str, workers: int,
+             radius_noise: float | None) -> tuple[list[dict], dict]:
+    """Every protocol of the grid: the sub-grid (:data:`SUBGRID_MIN`) in full, then the cells between with
+    :func:`_hint`.  Returns the entries and what the map computed how (plan.json ``computation``)."""
+    shape = [len(a) for a in axes]
+    coarse = [_coarse(k) for k in shape]
+    full = [i for i, idx in enumerate(np.ndindex(*shape)) if all(j in c for j, c in zip(idx, coarse))]
+    if len(full) == len(protocols):
+        return _run(protocols, slips, w, mu, membrane, workers, radius_noise), {"sub_grid": None}
+    done = dict(zip(full, _run([protocols[i] for i in full], slips, w, mu, membrane, workers, radius_noise)))
+    rest, hints = [], []
+    for i, idx in enumerate(np.ndindex(*shape)):
+        if i in done:
+            continue
+        neighbours = [(int(np.ravel_multi_index(tuple(j for j, _ in combo), shape)), float(np.prod([wt for _, wt in combo])))
+                      for combo in itertools.product(*[_bracket(j, c) for j, c in zip(idx, coarse)])]
+        rest.append(i)
+        hints.append(_hint(done, neighbours, slips))
+    done.update(zip(rest, _run([protocols[i] for i in rest], slips, w, mu, membrane, workers, radius_noise, hints)))
+    entries = [done[i] for i in range(len(protocols))]
+    return entries, {"sub_grid": [[float(axes[d][j]) for j in c] for d, c in enumerate(coarse)],
+                     "sub_grid_cells": len(full)}
+
+
+def _computed(entries: list[dict]) -> dict:
+    """How many (protocol, slip) predictions took W_ad's width (the fit's profile or the Fisher information) and
+    P(drift fitted) (noisy copies or interpolated) by which method."""
+    count: dict = {"w_ad_width": {}, "p_drift": {}}
+    for e in entries:
+        for b in (e.get("by_slip") or {}).values():
+            for key, m in (("w_ad_width", b["w_ad_width_method"]), ("p_drift", b["p_drift_method"])):
+                count[key][m] = count[key].get(m, 0) + 1
+    return count
+
+
+def _full(entry: dict) -> bool:
+    return all(b["p_drift_method"] != "interpolated" for b in (entry.get("by_slip") or {}).values())
 
 
 def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise: float | str,
@@ -221,7 +315,7 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
     r_noise = None
     if radius_noise is not None:
         r_noise = parse_noise(radius_noise, "--radius-noise")
-    entries = _run(protocols, slips, w, mu, membrane, workers, r_noise)
+    entries, computation = _run_map(protocols, axes, slips, w, mu, membrane, workers, r_noise)
     names = list(grid_spec)
     for p, e in zip(protocols, entries):
         e["grid"] = {n: p.value(n) for n in names}
@@ -234,14 +328,27 @@ def plan(scene: Any, *, work_of_adhesion: float | str, mu_h: float | str, noise:
                          f"All {len(entries)} protocol(s) leave it; the first because {why.rstrip('.')}. Fix: change "
                          f"the loading end, the pressure or gap, or the guessed W_ad and μh.")
     index, why = recommend(entries, w, target_precision)
+    for _ in range(len(entries)):  # the recommended protocol with every part computed, not interpolated
+        if index is None or _full(entries[index]):
+            break
+        entries[index] = _run([protocols[index]], slips, w, mu, membrane, 1, r_noise)[0]
+        entries[index]["grid"] = {n: protocols[index].value(n) for n in names}
+        index, why = recommend(entries, w, target_precision)
+    computation["predictions"] = _computed(entries)
+    if computation["sub_grid"] is not None:
+        c = computation["predictions"]
+        why += (f" (map: W_ad's width from the fit's profile in {c['w_ad_width'].get('profile', 0)} predictions, "
+                f"the Fisher width in {c['w_ad_width'].get('fisher', 0)}; P(drift fitted) interpolated between the "
+                f"sub-grid's cells in {c['p_drift'].get('interpolated', 0)}, from noisy copies in "
+                f"{c['p_drift'].get('noisy copies', 0)}; plan.json by_slip says which)")
     inputs = {"scene": str(sc.source) if sc.source else None, "work_of_adhesion": w, "mu_h": mu, "noise": sigma,
               "rows": n_rows, "slips": list(slips), "loading_end": {end: end_value}, "target_precision": target_precision,
               "membrane": membrane, "radius_noise": r_noise, "vary": {k: list(v) for k, v in grid_spec.items()}, "p_decided_required": 0.9}
     result = Plan(protocols=entries, recommended=index, why=why, axes=dict(zip(names, axes)), inputs=inputs,
-                  base=base)
+                  base=base, computation=computation)
     if global_k is not None:
         from .series import best_set  # noqa: PLC0415
         series = best_set(result, int(global_k), slips, w, mu, membrane)
         result = Plan(protocols=entries, recommended=index, why=why, axes=result.axes, inputs=inputs,
-                      series=series, base=base)
+                      series=series, base=base, computation=computation)
     return result

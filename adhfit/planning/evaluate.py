@@ -1,7 +1,9 @@
 """One protocol's prediction: interval widths, slip-verdict probabilities, domain and membrane model.
 
 For each true slip condition the noiseless curve (:mod:`.truth`) gives the Fisher widths
-(:mod:`.information`) and the other condition's misfit (:mod:`.verdict`).  The membrane model is the
+(:mod:`.information`; W_ad's from the fit's own profile where the rows at pull-off carry its information)
+and the other condition's misfit (:mod:`.verdict`), for the nuisance set the fit uses on it and, weighted by
+how often the fit uses each (:func:`.truth.drift_probability`), for the other one.  The membrane model is the
 scene's; under ``auto`` it is the one the fit would choose at the truth (the fit's own rule,
 :func:`adhfit.fitting.membrane.approximation_effect`: the exact membrane when the large-stretch
 force is off by more than half σ at some row, or shifts W_ad or μh by more than half a standard error),
@@ -9,6 +11,7 @@ and the prediction is then made with that membrane's model.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -17,14 +20,17 @@ from ..errors import AdhfitError
 from ..fitting.lsq import COARSE_TOL, RawFit, minimise, residual_function
 from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
-from .information import Z95, jacobian, log_widths, radius_jacobian, reduced_information
+from .information import (Z95, jacobian, log_widths, profile_widths_fit, radius_jacobian, reduced_information,
+                          with_drift_flipped)
 from .protocols import Protocol
-from .truth import OutOfDomain, loading_end, noiseless_test
+from .truth import OutOfDomain, drift_probability, loading_end, noiseless_test
 from .verdict import misfit, verdict_probabilities
 
 __all__ = ["predict", "auto_membrane", "OTHER"]
 
 OTHER = {"no-slip": "frictionless", "frictionless": "no-slip"}
+#: a nuisance set the fit uses in fewer replicates than this is left out of the prediction
+MIXTURE_FLOOR = 0.02
 
 
 def auto_membrane(truth) -> str:
@@ -41,71 +47,182 @@ def auto_membrane(truth) -> str:
     return "exact" if effect.resolved() else "large-stretch"
 
 
-def _interval(value: float, rel_se: float) -> tuple[float, float]:
+def _interval(value: float, rel_se: float, limits: tuple | None = None) -> tuple[float, float]:
+    if limits is not None:  # a profile's (asymmetric) ln limits relative to the value
+        return value * math.exp(limits[0]), value * math.exp(limits[1])
     return value * math.exp(-Z95 * rel_se), value * math.exp(Z95 * rel_se)
 
 
-def reported_widths(widths: dict, truth: dict, m, probs: dict) -> dict:
+def reported_widths(parts: list) -> dict:
     """The width the fit reports, as a distribution over its verdict (:func:`adhfit.fitting.stage.reported`):
     the true condition's interval when it is selected, the other's when that is, and otherwise the hull of
     both (the two optima differ, so an undecided verdict widens the interval).
 
+    ``parts``: ``(weight, widths, truth values, misfit, verdict probabilities)`` of each nuisance set the fit
+    may use (with and without the drift, :func:`.truth.drift_probability`), weights summing to 1.
+
     Returns, per parameter, ``decided``, ``undecided`` (the hull), ``mean`` (over the verdict's
-    probabilities: the expected width) and ``median`` widths (SI).
+    probabilities: the expected width) and ``median`` widths (SI); ``decided`` and ``undecided`` are the
+    weighted means over the parts.
     """
-    p_true, p_wrong = probs["decided"], probs["wrong"]
-    p_und = max(1.0 - p_true - p_wrong, 0.0)
     out = {}
-    for name, w in widths.items():
-        own = w["width"]
-        if m.widths is None or not math.isfinite(own):
-            out[name] = {"decided": own, "undecided": own, "mean": own, "median": own}
-            continue
-        other = m.widths[name]["width"]
-        lo_t, hi_t = _interval(truth[name], w["relative_se"])
-        lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"])
-        hull = max(hi_t, hi_w) - min(lo_t, lo_w)
-        points = sorted([(own, p_true), (other, p_wrong), (hull, p_und)])
+    for name in parts[0][1]:
+        points, dec, und = [], 0.0, 0.0
+        for weight, widths, truth, m, probs in parts:
+            w = widths[name]
+            own = w["width"]
+            p_true, p_wrong = probs["decided"], probs["wrong"]
+            p_und = max(1.0 - p_true - p_wrong, 0.0)
+            if m.widths is None or not math.isfinite(own):
+                points.append((own, weight))
+                dec, und = dec + weight * own, und + weight * own
+                continue
+            other = m.widths[name]["width"]
+            lo_t, hi_t = _interval(truth[name], w["relative_se"], w.get("interval"))
+            lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"])
+            hull = max(hi_t, hi_w) - min(lo_t, lo_w)
+            points += [(own, weight * p_true), (other, weight * p_wrong), (hull, weight * p_und)]
+            dec, und = dec + weight * own, und + weight * hull
+        points.sort()
         cum, median = 0.0, points[-1][0]
         for value, p in points:
             cum += p
             if cum >= 0.5:
                 median = value
                 break
-        out[name] = {"decided": own, "undecided": hull, "mean": p_true * own + p_wrong * other + p_und * hull,
-                     "median": median}
+        mean = sum(v * p for v, p in points) if all(math.isfinite(v) for v, _ in points) else math.inf
+        out[name] = {"decided": dec, "undecided": und, "mean": mean, "median": median}
     return out
 
 
-def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None) -> dict:
+def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile: bool = True,
+             flip_of: dict | None = None) -> dict:
+    """One nuisance set's prediction on the noiseless test ``truth`` (:func:`.truth.noiseless_test`; the
+    nuisances are its ``par``).  ``verdict``: fit the other slip condition (its misfit); ``profile``: W_ad's
+    width from the fit's profile where the pull-off rows carry its information; ``flip_of``: the other nuisance set's variant on the same curve, whose Jacobian
+    gives this one's by the drift's column (:func:`.information.with_drift_flipped`)."""
+    if flip_of is not None:
+        r = flip_of["r"]
+        J_force = with_drift_flipped(truth.model, flip_of["truth"].par, truth.sigma, truth.values, flip_of["J_force"])
+        J = J_force
+        if radius_noise is not None:
+            J = with_drift_flipped(truth.model, flip_of["truth"].par, truth.sigma, truth.values, flip_of["J"])
+    else:
+        try:
+            r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
+        except ValueError as err:
+            raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
+        J_force = J
+        if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
+            J = np.vstack([J, radius_jacobian(truth, radius_noise)])
+    widths = log_widths(J, truth.values)
+    widths["work_of_adhesion"]["method"] = "fisher"
+    if profile and radius_noise is None and chosen == "large-stretch" and _near_pull_off(truth, J, widths):
+        # W_ad: the fit's own profile on the noiseless curve (the pull-off term and the clamp at the turning
+        # point are not quadratic: :func:`.information.profile_widths_fit`); μh: its Fisher width agrees with
+        # its profile to 3 % and costs nothing more
+        fisher = widths["work_of_adhesion"]
+        try:
+            prof = profile_widths_fit(truth.model, truth.par, truth.sigma, truth.values, J, ("work_of_adhesion",))
+        except (AdhfitError, ValueError, np.linalg.LinAlgError):
+            prof = None
+        if prof is not None:
+            widths["work_of_adhesion"] = {**prof["work_of_adhesion"], "method": "profile",
+                                          "fisher_width": fisher["width"], "fisher_relative_se": fisher["relative_se"]}
+    out = {"truth": truth, "J": J, "J_force": J_force, "r": r, "widths": widths}
+    if verdict:  # the verdict is the force's alone (a filmed radius only narrows the widths)
+        out["m"] = misfit(truth, OTHER[slip], r, J_force)
+        out["probs"] = verdict_probabilities(out["m"])
+    return out
+
+
+#: the W_ad profile is computed when the rows at the pull-off (its censored term and the last attached row, next
+#: to the turning point's clamp) carry this much of the Fisher information: without them the width grows by
+#: more than this factor (a deep displacement-control test: 1.01, its profile agrees with the Fisher width to
+#: 0.3 %; a shallow one: 17-80; pressure control: 60-200)
+PULL_OFF_SHARE = 1.1
+
+
+def profile_factors(widths: dict) -> tuple | None:
+    """W_ad's profile limits over its Fisher half-width 1.96 se (lower, upper; both positive), or None when its
+    width is the Fisher one (plan.json ``by_slip``: how far the profile departs from the Fisher interval)."""
+    w = widths["work_of_adhesion"]
+    if w.get("method") != "profile" or not w.get("fisher_relative_se"):
+        return None
+    h = Z95 * w["fisher_relative_se"]
+    return -w["interval"][0] / h, w["interval"][1] / h
+
+
+def _near_pull_off(truth, J, widths) -> bool:
+    """Whether W_ad's information comes from the rows at the pull-off, where the likelihood is not quadratic."""
+    j = truth.model.segments.i_jump
+    if truth.model.jump is None or j is None:
+        return False
+    keep = np.ones(J.shape[0], bool)
+    keep[truth.model.curve.force.size] = False  # the pull-off term (after the force rows)
+    keep[j - 1] = False
+    without = log_widths(J[keep], truth.values)["work_of_adhesion"]["width"]
+    return not without <= PULL_OFF_SHARE * widths["work_of_adhesion"]["width"]
+
+
+def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None, hint: dict | None = None) -> dict:
     truth = noiseless_test(protocol, slip, w, mu, x_max)
     chosen = membrane
     if membrane == "auto":
         chosen = auto_membrane(truth)
     if chosen != "large-stretch":
         truth = noiseless_test(protocol, slip, w, mu, x_max, membrane=chosen, points=EXACT_POINTS)
-    try:
-        r, J, _ = jacobian(truth.model, truth.par, truth.sigma, truth.values)
-    except ValueError as err:
-        raise OutOfDomain(f"the {slip} fit model at the truth: {err}") from None
-    if radius_noise is not None:  # a filmed test: the fit's contact-radius block, in units of its own σ
-        J = np.vstack([J, radius_jacobian(truth, radius_noise)])
-    widths = log_widths(J, truth.values)
-    m = misfit(truth, OTHER[slip], r, J)
-    probs = verdict_probabilities(m)
-    reported = reported_widths(widths, truth.values, m, probs)
+    hint = hint or {}
+    main = _variant(truth, slip, chosen, radius_noise)
+    if hint.get("p_drift") is not None:
+        p_drift, drift_method = float(hint["p_drift"]), "interpolated"
+    else:
+        p_drift, drift_method = drift_probability(truth), "noisy copies"
+    has = "force_drift" in truth.par.names
+    # the share of replicates whose fit uses the noiseless curve's nuisance set; the other set's prediction
+    # where it is not rare.  Its verdict needs its own misfit only where the main one is marginal (else both
+    # decide, or neither); its W_ad width is its Fisher width scaled as the main set's profile scales its own
+    share = p_drift if has else 1.0 - p_drift
+    parts = [(1.0, main)]
+    if share < 1.0 - MIXTURE_FLOOR:
+        marginal = MIXTURE_FLOOR < main["probs"]["decided"] < 1.0 - MIXTURE_FLOOR
+        try:  # the same curve and model, the other nuisance set
+            flipped = dataclasses.replace(truth, par=dataclasses.replace(truth.par, fit_force_drift=not has))
+            alt = _variant(flipped, slip, chosen, radius_noise, verdict=marginal, profile=False, flip_of=main)
+        except OutOfDomain:
+            alt = None
+        if alt is not None:
+            if not marginal:
+                alt["m"], alt["probs"] = main["m"], main["probs"]
+            wm = main["widths"]["work_of_adhesion"]
+            if "fisher_width" in wm and wm["fisher_width"] > 0:
+                ratio = wm["width"] / wm["fisher_width"]
+                wa = alt["widths"]["work_of_adhesion"]
+                alt["widths"]["work_of_adhesion"] = {**wa, "width": wa["width"] * ratio,
+                                                     "relative_se": wa["relative_se"] * ratio,
+                                                     "interval": tuple(ratio * np.asarray(wm["interval"]))}
+            parts = [(share, main), (1.0 - share, alt)]
+    if len(parts) == 1:
+        probs = main["probs"]
+    else:
+        probs = verdict_probabilities([v["m"] for _, v in parts], [wt for wt, _ in parts])
+    reported = reported_widths([(wt, v["widths"], v["truth"].values, v["m"], v["probs"]) for wt, v in parts])
+    widths = {name: dict(main["widths"][name], width=sum(wt * v["widths"][name]["width"] for wt, v in parts))
+              for name in main["widths"]}
+    m, J = main["m"], main["J"]
     try:
         info = reduced_information(J).tolist()
     except np.linalg.LinAlgError:
         info = None
-    return {"widths": widths, "reported": reported, "verdict": probs, "membrane": chosen, "sigma": truth.sigma, "information": info,
-            "misfit": m.to_dict(),
-            "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(r.size),
+    return {"widths": widths, "reported": reported, "verdict": probs, "membrane": chosen, "sigma": truth.sigma,
+            "information": info, "misfit": m.to_dict(), "p_drift": p_drift, "p_drift_method": drift_method,
+            "w_method": main["widths"]["work_of_adhesion"]["method"], "profile_factors": profile_factors(main["widths"]),
+            "a_max": truth.a_max, "nuisances": truth.par.names[2:], "n_residuals": int(main["r"].size),
             "other_optimum": m.values}
 
 
 def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str = "auto",
-            radius_noise: float | None = None) -> dict:
+            radius_noise: float | None = None, hints: dict | None = None) -> dict:
     """The plan.json entry of one protocol (docs/contracts.md A8) plus the details behind it.
 
     Parameters
@@ -119,6 +236,10 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
     radius_noise : float, optional
         A filmed contact radius with this noise (a fraction of the largest contact radius): its block joins
         the widths' information (the slip verdict stays force-only: a lower bound on its P).
+    hints : dict, optional
+        slip -> ``{"p_drift": P or None}``: P(drift fitted) interpolated from a map's sub-grid
+        (:func:`.api.plan`), used instead of its noisy copies.  ``by_slip`` says
+        which method each cell used (``w_ad_width_method``, ``p_drift_method``).
     """
     entry = {"settings": protocol.settings(), "ci95_width": {"work_of_adhesion": None, "mu_h": None},
              "p_slip_decided": {s: None for s in slips}, "p_wrong_slip": {s: None for s in slips},
@@ -127,7 +248,7 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
         if protocol.invalid:
             raise OutOfDomain(protocol.invalid[2])
         x_max = loading_end(protocol, slips[0], w, mu)
-        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane, radius_noise) for s in slips}
+        per = {s: _one_slip(protocol, s, w, mu, x_max, membrane, radius_noise, (hints or {}).get(s)) for s in slips}
     except OutOfDomain as err:
         entry["why_not"] = str(err)
         return entry
@@ -149,7 +270,9 @@ def predict(protocol: Protocol, slips: tuple, w: float, mu: float, membrane: str
                             "evidence": p["verdict"]["words"], "delta_bic_median": p["verdict"]["delta_bic"],
                             "delta_bic_90": p["verdict"]["delta_bic_range"], "misfit_chi2": p["verdict"]["misfit"],
                             "sigma_force": p["sigma"], "contact_radius_max": p["a_max"] * protocol.scene.membrane_radius,
-                            "nuisances": p["nuisances"], "membrane": p["membrane"],
+                            "nuisances": p["nuisances"], "p_drift_fitted": p["p_drift"], "p_drift_method": p["p_drift_method"],
+                            "w_ad_width_method": p["w_method"], "w_ad_profile_factors": p["profile_factors"],
+                            "membrane": p["membrane"], "other_optimum": p["other_optimum"],
                             "information": p["information"], "misfit": p["misfit"]}
                         for s, p in per.items()}
     if not all(math.isfinite(v) for v in entry["ci95_width"].values()):

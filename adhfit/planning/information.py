@@ -32,7 +32,7 @@ from ..fitting.objective import Values
 from ..fitting.starts import Start
 
 __all__ = ["internal", "residual_at", "jacobian", "radius_jacobian", "log_widths", "reduced_information", "widths_from_information",
-           "pull_off_curvature", "pull_off_slopes", "Z95", "STEP"]
+           "pull_off_curvature", "pull_off_slopes", "with_drift_flipped", "profile_widths_fit", "Z95", "STEP"]
 
 #: two-sided 95 % normal quantile
 Z95 = 1.959963984540054
@@ -126,6 +126,29 @@ def jacobian(model, par, sigma: float, values: dict, *, raw_pull_off: bool = Fal
     return r0, J, names
 
 
+def with_drift_flipped(model, par, sigma: float, values: dict, J: np.ndarray) -> np.ndarray:
+    """:func:`jacobian` of the same residual with the load-cell drift's column added (``par`` without it) or
+    dropped (``par`` with it), from ``J`` of ``par``: at the truth the drift is 0, so the residual and the
+    other columns are the same, and the pull-off row's drift entry is 0 (the turning point does not depend on
+    the load cell).  Only an added column costs two residual evaluations.  ``J`` may carry rows of a filmed
+    radius below the force residual's (their drift entries are 0 too)."""
+    import dataclasses  # noqa: PLC0415
+    if par.fit_force_drift:  # the drift is the last parameter (Parametrisation.names)
+        return J[:, :-1].copy()
+    flipped = dataclasses.replace(par, fit_force_drift=True)
+    names, theta = internal(flipped, values)
+    at = residual_at(model, flipped, sigma)
+    up, down = theta.copy(), theta.copy()
+    up[-1] += STEP
+    down[-1] -= STEP
+    col = np.zeros(J.shape[0])
+    ru, rd = at(names, up), at(names, down)
+    col[: ru.size] = (ru - rd) / (2.0 * STEP)
+    if model.jump is not None:
+        col[ru.size - 1] = 0.0
+    return np.column_stack([J, col])
+
+
 def log_widths(J: np.ndarray, values: dict) -> dict:
     """Expected 95 % widths (SI) and relative standard errors of W_ad and μh from a Jacobian whose first two
     columns are ln W_ad and ln μh; ``inf`` where the information is singular."""
@@ -190,3 +213,58 @@ def radius_jacobian(truth, radius_noise: float) -> np.ndarray:
         down[i] -= STEP
         cols.append((radius(up) - radius(down))[rows] / (2.0 * STEP * sigma_a))
     return np.column_stack(cols)
+
+
+def profile_widths_fit(model, par, sigma: float, values: dict, J: np.ndarray | None = None,
+                       names: tuple = ("work_of_adhesion", "mu_h")) -> dict | None:
+    """Expected 95 % widths of W_ad and μh from the fit's own likelihood profile on the noiseless curve.
+
+    The fit's χ² with σ given, on the noiseless curve, is the expected χ² surface of a noisy replicate (up to
+    the constant n − k): its profile interval (:func:`adhfit.fitting.profile.profile_interval`, the fit's own
+    code) is the interval a replicate reports, typically.  Unlike the Fisher information it follows the two
+    places where the fit's likelihood is not quadratic near pull-off: the censored pull-off term
+    (:func:`adhfit.fitting.lsq.pull_off_term`) and the attached rows next to the turning point, whose force
+    has an infinite slope there and is clamped beyond it (:class:`adhfit.fitting.model.CurveModel`): once
+    the model's turning point passes the last attached row, that row's residual jumps.  In a shallow
+    displacement-control test these make the W_ad profile asymmetric and 1.6x narrower than the Fisher
+    information says; the noisy replicates' median agrees with this profile (docs/planning.md).
+
+    ``J``: the Fisher Jacobian (:func:`jacobian`), whose covariance places the profile's first probes.
+    ``names``: the parameters profiled.
+
+    Returns :func:`log_widths`' dict plus ``interval`` (ln limits relative to the truth); ``None`` when the
+    profile does not close (a side open or a sub-fit outside the model's domain): the caller keeps the
+    Fisher widths then.
+    """
+    from types import SimpleNamespace  # noqa: PLC0415
+
+    from ..fitting.profile import profile_interval  # noqa: PLC0415
+    res = residual_function(model, par, sigma, sigma)
+    params = par.params(Start(values))
+    order = [k for k, p in params.items() if p.vary]
+    r0 = np.asarray(res(params), float)
+    cov = None
+    if J is not None and order == internal(par, values)[0]:
+        try:
+            cov = np.linalg.inv(J.T @ J)
+        except np.linalg.LinAlgError:
+            cov = None
+    # the optimum of the noiseless curve is the truth (up to the pull-off term's small constant, ~1e-3 of χ²
+    # off): no least squares.  The profile's first probes and the other parameters' warm starts come from the
+    # covariance, as the fit has one (the Fisher covariance of ``J``): the sub-fits are capped at 200
+    # evaluations, and without a warm start they stop short and the interval comes out too narrow
+    best = SimpleNamespace(params=params, var_names=order, chisqr=float(r0 @ r0), ndata=int(r0.size),
+                           nvarys=len(order), covar=cov)
+    out = {}
+    for name in names:
+        key = "ln_" + name
+        lo, hi = profile_interval(res, best, key, sigma_given=True)
+        # the limits as the fit takes them (adhfit.fitting.intervals.from_profile): the bracketed limit, or
+        # the nearest probe beyond it where the χ² jumps (the clamp at the turning point)
+        if lo.open or hi.open or lo.bound is None or hi.bound is None:
+            return None
+        a, b = lo.bound, hi.bound
+        t0 = math.log(values[name])
+        out[name] = {"width": math.exp(b) - math.exp(a), "relative_se": (b - a) / (2 * Z95),
+                     "interval": (a - t0, b - t0)}
+    return out

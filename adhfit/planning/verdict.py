@@ -29,7 +29,7 @@ import numpy as np
 from ..fitting.lsq import COARSE_TOL, minimise, residual_function
 from ..fitting.selection import DECISIVE, POSITIVE, STRONG
 from ..fitting.starts import Start
-from .information import jacobian, log_widths, pull_off_slopes
+from .information import jacobian, log_widths, pull_off_curvature, pull_off_slopes
 
 __all__ = ["misfit", "Misfit", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
            "WORDS"]
@@ -84,11 +84,19 @@ def _hat_overlap(J1: np.ndarray, J2: np.ndarray) -> float:
     return float(np.sum((q1.T @ q2) ** 2))
 
 
-def _covariance_widths(model, par, sigma: float, values: dict, inflate: float) -> dict:
+def _covariance_widths(model, par, sigma: float, values: dict, inflate: float, J: np.ndarray | None = None) -> dict:
     """The other condition's covariance interval widths: the median over where its turning point falls in the
     pull-off gap (the pull-off row's slope goes from ~0 in the middle to its largest at the edges, and the
-    W_ad interval with it)."""
-    J = jacobian(model, par, sigma, values, raw_pull_off=True)[1] / inflate
+    W_ad interval with it).
+
+    ``J``: :func:`.information.jacobian` at ``values`` (its pull-off row the quadratic one), reused: only the
+    pull-off row differs from the raw Jacobian, by the factor sqrt(k) (:func:`.information.pull_off_curvature`)."""
+    if J is None:
+        J = jacobian(model, par, sigma, values, raw_pull_off=True)[1] / inflate
+    else:
+        J = J / inflate
+        if model.jump is not None:
+            J[-1] /= math.sqrt(pull_off_curvature(model.jump))
     gap = model.jump
     if gap is None:
         return log_widths(J, values)
@@ -120,8 +128,10 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
         # the covariance: the pull-off row's own derivative), its σ estimate inflated by the misfit; the hull of
         # an undecided verdict takes it in (:func:`adhfit.fitting.stage.reported`)
         inflate = math.sqrt(1.0 + lam / max(r_true.size - k, 1))
-        other_widths = _covariance_widths(model, par, sigma, values, inflate)
-        lin = 4.0 * float(np.sum((r_w - r_true) ** 2))
+        other_widths = _covariance_widths(model, par, sigma, values, inflate, J_w)
+        # the noise enters the force rows only (not the pull-off term, the last row when there is one)
+        g = r_true.size - (truth.model.jump is not None)
+        lin = 4.0 * float(np.sum((r_w[:g] - r_true[:g]) ** 2))
         quad = 2.0 * max(2 * k - 2 * _hat_overlap(J_true, J_w), 0.0)
     except ValueError:  # the other condition's optimum sits at the model's edge: the linear term only
         lin, quad, other_widths = 4.0 * lam, 0.0, None
@@ -149,8 +159,12 @@ def word_probabilities(dbic: np.ndarray) -> dict:
     return {k: float(v) for k, v in p.items()}
 
 
-def verdict_probabilities(m: Misfit) -> dict:
+def verdict_probabilities(m, weights=None) -> dict:
     """P(each evidence word) for the true condition, from the sampled ΔBIC (module docstring).
+
+    ``m`` is a :class:`Misfit`, or a list of them with ``weights``: the fit's nuisances differ between
+    replicates (the drift, :func:`.truth.drift_probability`), so the ΔBIC is a mixture, each part sampled
+    with its share of the draws.
 
     Returns
     -------
@@ -159,9 +173,16 @@ def verdict_probabilities(m: Misfit) -> dict:
         condition)), ``wrong`` (P(ΔBIC > 10 for the other)), ``delta_bic`` (the median), ``delta_bic_range``
         (the 5 and 95 % quantiles; negative: the other condition favoured), ``misfit`` (λ).
     """
-    dbic = sample_delta_bic(m, np.random.default_rng(SEED))
+    rng = np.random.default_rng(SEED)
+    if isinstance(m, Misfit):
+        dbic = sample_delta_bic(m, rng)
+        lam = m.lam
+    else:
+        counts = np.round(np.asarray(weights, float) / np.sum(weights) * DRAWS).astype(int)
+        dbic = np.concatenate([sample_delta_bic(mi, rng, int(c)) for mi, c in zip(m, counts) if c > 0])
+        lam = float(np.dot(weights, [mi.lam for mi in m]) / np.sum(weights))
     p = word_probabilities(dbic)
     q05, q50, q95 = np.quantile(dbic, [0.05, 0.5, 0.95])
     return {"words": p, "decided": float(p["very strong"]),
             "wrong": float(p["wrong: very strong"]), "delta_bic": float(q50),
-            "delta_bic_range": [float(q05), float(q95)], "misfit": m.lam}
+            "delta_bic_range": [float(q05), float(q95)], "misfit": lam}
