@@ -24,7 +24,7 @@ from .information import (Z95, jacobian, log_widths, profile_widths_fit, radius_
                           with_drift_flipped)
 from .protocols import Protocol
 from .truth import OutOfDomain, drift_probability, loading_end, noiseless_test
-from .verdict import misfit, verdict_probabilities
+from .verdict import UNDECIDED_MIN, misfit, profile_other, verdict_probabilities
 
 __all__ = ["predict", "auto_membrane", "OTHER"]
 
@@ -79,7 +79,7 @@ def reported_widths(parts: list) -> dict:
                 continue
             other = m.widths[name]["width"]
             lo_t, hi_t = _interval(truth[name], w["relative_se"], w.get("interval"))
-            lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"])
+            lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"], m.widths[name].get("interval"))
             hull = max(hi_t, hi_w) - min(lo_t, lo_w)
             points += [(own, weight * p_true), (other, weight * p_wrong), (hull, weight * p_und)]
             dec, und = dec + weight * own, und + weight * hull
@@ -133,6 +133,10 @@ def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile
     if verdict:  # the verdict is the force's alone (a filmed radius only narrows the widths)
         out["m"] = misfit(truth, OTHER[slip], r, J_force)
         out["probs"] = verdict_probabilities(out["m"])
+        undecided = 1.0 - out["probs"]["decided"] - out["probs"]["wrong"]
+        if profile and radius_noise is None and chosen == "large-stretch" and out["m"].widths is not None \
+                and undecided >= UNDECIDED_MIN:
+            profile_other(truth, OTHER[slip], out["m"])  # the hull an undecided fit reports: both profiles
     return out
 
 

@@ -31,7 +31,7 @@ from ..fitting.selection import DECISIVE, POSITIVE, STRONG
 from ..fitting.starts import Start
 from .information import jacobian, log_widths, pull_off_curvature, pull_off_slopes
 
-__all__ = ["misfit", "Misfit", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
+__all__ = ["misfit", "Misfit", "profile_other", "UNDECIDED_MIN", "verdict_probabilities", "sample_delta_bic", "word_probabilities", "DRAWS", "SEED",
            "WORDS"]
 
 #: draws of the ΔBIC distribution, and their fixed seed (a plan is reproducible)
@@ -138,6 +138,29 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
     out = Misfit(lam, lin, quad, r_true.size, k, chi_t, values)
     out.widths = other_widths
     return out
+
+
+#: the other condition's W_ad profile is computed when the verdict is undecided at least this often
+UNDECIDED_MIN = 0.02
+
+
+def profile_other(truth, other_slip: str, m: "Misfit") -> None:
+    """Replace the other condition's W_ad width in ``m`` by its likelihood profile on the noiseless curve.
+
+    An undecided fit reports the hull of both conditions' intervals, each from its profile
+    (:func:`adhfit.fitting.stage.least_squares`); the other condition's covariance interval is fragile at the
+    pull-off's kink, so the plan takes its profile too (:func:`.information.profile_widths_fit`, with σ
+    inflated by the misfit as the fit's estimate of σ is).  Left as it is when the profile does not close."""
+    from .information import profile_widths_fit  # noqa: PLC0415
+    model = truth.model_of(other_slip)
+    inflate = math.sqrt(1.0 + m.lam / max(m.n - m.k, 1))
+    try:
+        _, J_w, _ = jacobian(model, truth.par, truth.sigma, m.values)
+        prof = profile_widths_fit(model, truth.par, truth.sigma * inflate, m.values, J_w, ("work_of_adhesion",))
+    except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+        prof = None
+    if prof is not None:
+        m.widths = {**m.widths, "work_of_adhesion": {**prof["work_of_adhesion"], "method": "profile"}}
 
 
 def sample_delta_bic(m: Misfit, rng: np.random.Generator, draws: int = DRAWS) -> np.ndarray:
