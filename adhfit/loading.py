@@ -307,7 +307,10 @@ def _raise(failures, v, info, c, pc, limit=None):
                           f"vertical there (sin theta = {limit.sigma:+.0f}, at p = {limit.kappa:.8g}) "
                           "and past it would turn beyond vertical (Case II, outside the model)",
                           f"the continuation stops at {name} = {float(failures[-1][2][2]):.8g} and a "
-                          "direct solve on the limit finds it there", "lower w, or change the loading end",
+                          "direct solve on the limit finds it there"
+                          + (" (the branch, followed on from the stop in sqrt(1 - |sin theta|), "
+                             "reaches it)" if limit.bridged else ""),
+                          "lower w, or change the loading end",
                           {**info, "locator": limit.loc, "kappa": limit.kappa})
     if status == K.H_END_UNREACHABLE:  # only with a_max given to the kernel unsolved: kept for safety
         name = "p_max" if pc else "delta_max"

@@ -33,6 +33,12 @@ SCENES = {
     # a = 0.6864 with alpha = 2.16 and its last row stable, labelled a branch end (alpha -> 0)
     "delamination-no-slip": dict(control="displacement", slip="no-slip", p=0.8479600653220087,
                                  w=6.542116544684643, rs=0.7480447397367088, a_max=0.6915444050367855),
+    # no-slip pinning under pressure control that meets the limit tangentially (1 - |sin theta(1)|
+    # ~ 0.033 (G_lim - G)^2): every grid stalled 2e-3 or more short of it, beyond AGREE, and this
+    # was the one ConvergenceError of the 10,000-scene large-stretch stress run
+    "pressure-no-slip-tangential": dict(control="pressure", slip="no-slip", d=-0.08814240787920569,
+                                        w=4.252429261577349, rs=4.5359521113307855,
+                                        p_max=4.549329119721055),
     # the same, from delta_max (a = 0.509 with alpha = 2.2 before)
     "delamination-no-slip-delta-max": dict(control="displacement", slip="no-slip", p=0.7346410112843984,
                                            w=8.10276249362778, rs=2.051381291372604,
@@ -53,6 +59,12 @@ def _with_a_max(sc, a_start):
     if "a_max" in sc:
         return sc
     with mp.workdps(30):
+        if "p_max" in sc:  # the making-contact gap at p_max reaches d
+            kap, rs = mp.mpf(sc["p_max"]), mp.mpf(sc["rs"])
+            a0 = mp.mpf(a_start)  # bracketed: the secant from a_start alone leaves a < 1
+            a = mp.findroot(lambda a: M.contact_profile(kap, a, rs).gap - mp.mpf(sc["d"]),
+                            (a0 * (1 - mp.mpf("1e-4")), a0 * (1 + mp.mpf("1e-4"))), solver="illinois")
+            return {**sc, "a_max": a}
         kap, rs = mp.mpf(sc["p"]), mp.mpf(sc["rs"])
         d_end = M.d0(kap) - mp.mpf(sc["delta_max"])
         a = mp.findroot(lambda a: M.contact_profile(kap, a, rs).gap - d_end, mp.mpf(a_start))
@@ -65,7 +77,8 @@ def _loaded(sc):
     if sc["control"] == "displacement":
         kap = mp.mpf(sc["p"])
     else:
-        kap = mp.findroot(lambda k: M.contact_profile(k, a_m, rs).gap - mp.mpf(sc["d"]), mp.mpf("0.5"))
+        kap = mp.findroot(lambda k: M.contact_profile(k, a_m, rs).gap - mp.mpf(sc["d"]),
+                          mp.mpf(sc.get("p_max", "0.5")))
     return kap, M.contact_profile(kap, a_m, rs).J0
 
 
@@ -178,3 +191,49 @@ def _admissible(call):
     except M.Inadmissible:
         return False
     return True
+
+
+def test_a_tangential_approach_to_the_limit_is_bridged_on_every_grid():
+    """The stall of TANGENTIAL lies 2e-3 (G) short of the limit state the direct solve finds; the
+    branch followed on from the stall in sqrt(1 - |sin theta(1)|) reaches it, on every grid alike."""
+    sc = SCENES["pressure-no-slip-tangential"]
+    locs = []
+    for n in (10, 200, 1001):
+        with pytest.raises(DomainError) as info:
+            adhfit.simulate(**sc, points=n)
+        # 1001 rows stall 1.4e-4 short, within AGREE: the direct solve alone confirms it there
+        assert ("followed on from the stop" in str(info.value)) == (n != 1001)
+        locs.append(info.value.inputs["locator"])
+    assert max(locs) - min(locs) < 1e-12
+    assert locs[0] == pytest.approx(2.6510121, abs=1e-7)
+
+
+def test_the_bridge_refuses_a_limit_state_off_the_branch():
+    """The bridge from a stall to a limit state that is not where the branch goes (the state found,
+    moved by 1e-4 in G or 1e-5 in t) is refused: then no DomainError is claimed."""
+    import numpy as np
+
+    from adhfit.core import branches, limit
+    from adhfit.core.history import _making_contact, _pinning
+    from adhfit.core.inflation import critical_pressure
+    from adhfit.loading import _grids
+
+    sc = SCENES["pressure-no-slip-tangential"]
+    with pytest.raises(DomainError) as info:
+        adhfit.simulate(**sc, points=200)
+    a_m = info.value.inputs["a_max"]
+    c, w, d = 1.0 / sc["rs"], sc["w"], sc["d"]
+    err = np.full(5, math.nan)
+    u_mc, u_pin, _ = _grids(200)
+    k_mc, out_mc, _ = _making_contact(True, c, 0.0, d, float(critical_pressure(d)), a_m * u_mc, err)
+    L_m = out_mc[6, -1]
+    _pinning(True, True, c, w, a_m, L_m, k_mc[-1], d, u_pin, err)
+    x0, k0, g0 = err[4], err[3], err[2]  # the stall
+    end = limit.case_one_end(branches.PIN_NS, True, x0, k0, g0, c, w, a_m, L_m, d)
+    assert end is not None and end.bridged and end.loc - g0 > limit.AGREE * g0
+    margin = 1.0 - abs(limit.clamp_sine(branches.PIN_NS, x0, k0, g0, c, w, a_m))
+    args = (branches.PIN_NS, True, c, w, a_m, L_m, d, k0, end.sigma)
+    z0, z_lim = np.array([x0, g0]), np.array([end.x, end.loc])
+    assert limit._bridged(z0, z_lim, margin, *args)
+    assert not limit._bridged(z0, z_lim + [0.0, 1e-4], margin, *args)
+    assert not limit._bridged(z0, z_lim + [1e-5, 0.0], margin, *args)

@@ -124,17 +124,36 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
         # a failed step is halved, so the nested pressure solve is cut short (solve.FALLBACK_ITER)
         # while the step is long and the predictor quadratic; the first steps of a branch (a poor
         # predictor) and steps halved to SHORT_UNTIL of the span run it in full
+        short = m > 2 and h > SHORT_UNTIL * span
         x, k, st = solve_one(code, pressure, loc, kg if pressure else k0, xg, c, w, a_m, L_m, d_fix,
-                             m > 2 and h > SHORT_UNTIL * span)
+                             short)
         good = st == 0
         if good:
             # every observable finite: at the Case I limit J0 can be finite where the gap is not
             good = admissible(observe(code, x, k, loc, c, w, a_m, obs), obs)
         if not good:
-            h *= 0.5
-            if h < 1e-10 * span:
-                if not (allow_end and m > 1):
-                    status = F_STALLED
+            # halved until the step changes: a step that closed the gap to the goal stays that
+            # step while the halved h still spans the gap, and would be solved again as it was
+            # and fail again (from the first state of a stage, up to ~25 times over); each
+            # skipped repeat still counts as a step
+            ended = False
+            while True:
+                h *= 0.5
+                if h < 1e-10 * span:
+                    if not (allow_end and m > 1):
+                        status = F_STALLED
+                    ended = True
+                    break
+                near = abs(gap) <= h or abs(gap) <= GAP_CLOSE * (1.0 + abs(goal))
+                if ((goal if near else ss[m - 1] + math.copysign(h, gap)) != s_new
+                        or (m > 2 and h > SHORT_UNTIL * span) != short):
+                    break
+                steps += 1
+                if steps > max_steps:
+                    status = F_STEPS
+                    ended = True
+                    break
+            if ended:
                 break
             continue
         ss[m], xs[m], ks[m] = s_new, (x if implicit else math.nan), k

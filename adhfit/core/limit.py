@@ -3,7 +3,9 @@
 A continuation that stalls on a state at that limit has met the end of the model, not a solver
 failure: past it the membrane would turn past vertical at the clamp (Case II, which the model, as
 the paper, leaves out). :func:`case_one_end` confirms such a stall by a second, independent method:
-it solves for the limit state directly, on the limit itself, where the equations are smooth.
+it solves for the limit state directly, on the limit itself, where the equations are smooth, and
+where that state lies farther from the stall than a tangential approach leaves (AGREE), follows the
+branch on from the stall to it in sqrt(1 - |sin theta(1)|) (:func:`_bridged`).
 
 On the limit, sin theta(1) = (kappa + D)/sqrt(1 + C2) = sigma (+-1) fixes the pressure explicitly
 (D = D0 - kappa a^2 on every branch), Q(r) = kappa^2 (1 - r^2)(r^2 - u_minus) has its root at the
@@ -47,6 +49,9 @@ class CaseOneEnd:
         sin theta at the clamp there (+1 or -1).
     residual : float
         Largest residual of the limit equations at the solution.
+    bridged : bool
+        The limit state lies farther than AGREE from the stall and the branch was followed on from
+        the stall to it (:func:`_bridged`).
     """
 
     loc: float
@@ -54,6 +59,7 @@ class CaseOneEnd:
     kappa: float
     sigma: float
     residual: float
+    bridged: bool = False
 
 
 def clamp_sine(code: int, x: float, kappa: float, loc: float, c: float, w: float, a_m: float) -> float:
@@ -130,7 +136,8 @@ def case_one_end(code: int, pressure: bool, x0: float, kappa0: float, loc0: floa
     -------
     CaseOneEnd or None
         The limit state when the stalled state lies within NEAR of the limit and the limit
-        equations solve within AGREE of it; else None (the stall is not shown to be the model's end).
+        equations solve within AGREE of it, or farther along a branch followed from the stall to it
+        (:func:`_bridged`); else None (the stall is not shown to be the model's end).
     """
     from scipy.optimize import root  # noqa: PLC0415 - only on the way to an error
 
@@ -153,14 +160,80 @@ def case_one_end(code: int, pressure: bool, x0: float, kappa0: float, loc0: floa
     loc = float(sol.x[-1])
     if not (np.all(np.isfinite(res)) and float(np.max(np.abs(res))) <= 1e-9):
         return None
-    if abs(loc - loc0) > AGREE * max(1.0, abs(loc0)):
+    far = abs(loc - loc0) > AGREE * max(1.0, abs(loc0))
+    if far and not _bridged(z0, sol.x, 1.0 - abs(s), code, pressure, c, w, a_m, L_m, d_fix, kappa0,
+                            sigma):
         return None
     # the limit state is a state of the model (Case I to rounding, Q >= 0 at the contact edge)
     x = float(sol.x[0]) if implicit else math.nan
     ok = state(code, x if implicit else 0.0, kappa, loc, c, w, a_m, False)[6]
     if not ok and not _edge_ok(code, x, kappa, loc, c, w, a_m):
         return None
-    return CaseOneEnd(loc=loc, x=x, kappa=float(kappa), sigma=sigma, residual=float(np.max(np.abs(res))))
+    return CaseOneEnd(loc=loc, x=x, kappa=float(kappa), sigma=sigma, residual=float(np.max(np.abs(res))),
+                      bridged=far)
+
+
+#: steps of :func:`_bridged` in sqrt(1 - |sin theta(1)|), from the stalled state to the limit
+BRIDGE_STEPS = 40
+
+
+def _off_limit(z, code, pressure, c, w, a_m, L_m, d_fix, kappa_dc, sine, x_fixed):
+    """The branch's equations at a state whose clamp sine is ``sine`` (|sine| < 1): the pressure
+    from the sine, as on the limit (:func:`_limit_kappa`), the integrals by the engine's closed
+    forms (``branches.state``); NaN outside the model."""
+    implicit = is_implicit(code)
+    x, loc = (z[0], z[1]) if implicit else (x_fixed, z[0])
+    kappa = _limit_kappa(code, x, loc, c, w, a_m, sine)[0]
+    st = state(code, x if implicit else 0.0, kappa, loc, c, w, a_m, True)
+    if not st[6]:
+        return np.full(len(z), np.nan)
+    out = []
+    if implicit:
+        out.append(float(st[5]) - float(material_target(code, loc, c, a_m, L_m)))
+    out.append(float(st[2]) - d_fix if pressure else kappa - kappa_dc)
+    return np.array(out)
+
+
+def _bridged(z0, z_lim, margin0, code, pressure, c, w, a_m, L_m, d_fix, kappa_dc, sigma):
+    """Whether the branch runs on from the stalled state ``z0`` (clamp margin ``margin0``) to the
+    limit state ``z_lim`` found farther than AGREE from it.
+
+    Where the branch meets the limit tangentially, 1 - |sin theta(1)| falls as the square of the
+    distance to it and a continuation in the locator can stall well short of it (issue-24 stress
+    scene: no-slip pinning under pressure control stalled at 1.3e-7, 2e-3 short in G). Here the
+    branch is followed in q = sqrt(1 - |sin theta(1)|), in which it is smooth, from the stalled state
+    down to q = 0: each state solved from the one before, extrapolated linearly (scipy's ``hybr``,
+    residual <= 1e-9), the locator moving one way only, toward the limit state, which the last
+    states must extrapolate to within 1e-6 (relative). A root that jumps or a failed solve is no
+    bridge: the stall then stays unproven."""
+    from scipy.optimize import root  # noqa: PLC0415 - only on the way to an error
+
+    q0 = math.sqrt(max(margin0, 0.0))
+    if not q0 > 0:
+        return False
+    qs = q0 * (1.0 - np.arange(1, BRIDGE_STEPS) / BRIDGE_STEPS)
+    zs, q_prev = [np.asarray(z0, float)], q0
+    direction = math.copysign(1.0, z_lim[-1] - z0[-1])
+    for q in qs:
+        guess = zs[-1] if len(zs) < 2 else zs[-1] + (zs[-1] - zs[-2]) * (q - q_prev) / step_prev
+        args = (code, pressure, c, w, a_m, L_m, d_fix, kappa_dc, sigma * (1.0 - q * q),
+                z0[0] if is_implicit(code) else math.nan)
+        try:
+            sol = root(lambda z: _off_limit(z, *args), guess, method="hybr", options={"xtol": 1e-13})
+            r = _off_limit(sol.x, *args)
+        except (ValueError, ZeroDivisionError, OverflowError):
+            return False
+        if not (np.all(np.isfinite(r)) and float(np.max(np.abs(r))) <= 1e-9):
+            return False
+        if (sol.x[-1] - zs[-1][-1]) * direction < 0:
+            return False  # the locator turned back: not the way to the limit state
+        step_prev = q - q_prev
+        zs.append(sol.x)
+        q_prev = q
+    # the last two states, linear in q, reach the limit state at q = 0
+    z_end = zs[-1] + (zs[-1] - zs[-2]) * (0.0 - q_prev) / step_prev
+    scale = np.maximum(1.0, np.abs(z_lim))
+    return bool(np.all(np.abs(z_end - np.asarray(z_lim)) <= 1e-6 * scale))
 
 
 def _edge_ok(code, x, kappa, loc, c, w, a_m):

@@ -130,16 +130,21 @@ def damped_step(x, last_good, r, dr):
 def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
     """Newton without a bracket for one row: (x, status); NaN when it does not converge.
 
-    A step that lands on NaN is halved back toward the last good iterate.
+    A step that lands on NaN is halved back toward the last good iterate. An iteration that leaves
+    (x, last good) as they were would repeat itself to MAXITER (a start outside the model, NaN
+    there: halfway back to itself), so it fails at once (the same answer, 60 evaluations sooner).
     """
     kc, lc = complex(kappa, 0.0), complex(loc, 0.0)
     x = last_good = x0
     for _ in range(MAXITER):
         z = material_residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
-        x, last_good, done = damped_step(x, last_good, z.real, z.imag / STEP)
+        xn, gn, done = damped_step(x, last_good, z.real, z.imag / STEP)
         if done:
             # a vanishing step at the Case I limit is not a root (ACCEPT)
-            return (x, OK) if abs(z.real) <= ACCEPT else (math.nan, FAIL_INNER)
+            return (xn, OK) if abs(z.real) <= ACCEPT else (math.nan, FAIL_INNER)
+        if xn == x and gn == last_good:
+            return math.nan, FAIL_INNER
+        x, last_good = xn, gn
     return math.nan, FAIL_INNER
 
 

@@ -145,6 +145,7 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, short=Fals
     # near; a caller that can shorten its step (:func:`.continuation.follow`) gives the nested
     # solve FALLBACK_ITER iterations, not MAXITER (failed steps cost up to 60 x 120 evaluations)
     for _ in range(FALLBACK_ITER if short else MAXITER):
+        memo_was, had_memo = memo, has_memo
         if implicit:
             xi, _st = inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo)
             if math.isfinite(xi):
@@ -153,9 +154,15 @@ def pressure_one(code, loc, c, w, a_m, L_m, d_fix, kappa, x0, has_x0, short=Fals
         xc = propagate(code, xi, kappa, kc, lc, c, w, a_m, L_m) if implicit else 0j
         sg = state(code, xc, kc, lc, c, w, a_m, True)
         g = sg[2] - d_fix if sg[6] else complex(math.nan, math.nan)
-        kappa, last_good, converged = damped_step(kappa, last_good, g.real, g.imag / STEP)
+        kn, gn, converged = damped_step(kappa, last_good, g.real, g.imag / STEP)
         if converged:
+            kappa, last_good = kn, gn
             break
+        if kn == kappa and gn == last_good and memo == memo_was and has_memo == had_memo:
+            # the next iteration would repeat this one (no inner solution, NaN gap: halfway back
+            # to itself) to the last: it fails now, with the same answer
+            break
+        kappa, last_good = kn, gn
     if not converged:
         return math.nan, kappa, FAIL_OUTER
     x, st = (inner_one(code, kappa, loc, c, w, a_m, L_m, memo, has_memo) if implicit
