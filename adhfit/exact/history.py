@@ -212,15 +212,10 @@ def _case_one_in_control(stage, c, before, good):
         try:
             st = ctl.solve(v, ctl.x(good))
         except PastVertical:
-            lo, hi = val(good), v
-            while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
-                mid = 0.5 * (lo + hi)
-                try:
-                    good, lo = ctl.solve(mid, ctl.x(good)), mid
-                except PastVertical:
-                    hi = mid
-                except ConvergenceError:
-                    return
+            found = _bisect_case_one(ctl, good, val(good), v, floor=1.0)
+            if found is None:
+                return
+            good = found[1]
             _raise_case_one(c, max(top, good.a), "the largest contact radius on the branch, whose end "
                             "is bracketed by solved states in the control to 1e-10")
         except ConvergenceError:
@@ -233,11 +228,11 @@ def _case_one_in_control(stage, c, before, good):
         good, h, top = st, 1.5 * h, max(top, st.a)
 
 
-def _bisect_case_one(stage, good, lo: float, hi: float):
+def _bisect_case_one(stage, good, lo: float, hi: float, floor: float = 0.0):
     """Bisect between the solved Case I state ``good`` (at ``lo``) and a parameter ``hi`` whose state turns
-    past vertical at the clamp, to 1e-10: ``(lo, good)`` at the limit, or None when a state between them
-    does not solve (the limit is then not shown)."""
-    while hi - lo > 1e-10 * hi:
+    past vertical at the clamp, to 1e-10 (relative to ``floor`` + |hi|; either direction): ``(lo, good)`` at
+    the limit, or None when a state between them does not solve (the limit is then not shown)."""
+    while abs(hi - lo) > 1e-10 * (floor + abs(hi)):
         mid = 0.5 * (lo + hi)
         try:
             good, lo = stage.solve(mid, stage.x(good)), mid
@@ -412,16 +407,10 @@ def _rows(stage, values, x0, c):
         try:
             stage.solve(v_bad, stage.x(good))
         except PastVertical:
-            lo, hi = getattr(good, stage.param) if stage.param == "alpha" else _control_value(c)(good), v_bad
-            while abs(hi - lo) > 1e-10 * (1.0 + abs(hi)):
-                mid = 0.5 * (lo + hi)
-                try:
-                    good, lo = stage.solve(mid, stage.x(good)), mid
-                except PastVertical:
-                    hi = mid
-                except ConvergenceError:
-                    break
-            else:
+            lo = getattr(good, stage.param) if stage.param == "alpha" else _control_value(c)(good)
+            found = _bisect_case_one(stage, good, lo, v_bad, floor=1.0)
+            if found is not None:
+                lo, good = found
                 name = stage.param if stage.param == "alpha" else ("d" if c.control == "displacement" else "p")
                 raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp "
                                   f"(Case II beyond, outside the model) at {name} = {lo:.10g} (alpha = "
