@@ -412,14 +412,8 @@ def _rows(stage, values, x0, c):
             if found is not None:
                 lo, good = found
                 name = stage.param if stage.param == "alpha" else ("d" if c.control == "displacement" else "p")
-                raise DomainError(f"the exact pinning branch ({c.slip}) turns past vertical at the clamp "
-                                  f"(Case II beyond, outside the model) at {name} = {lo:.10g} (alpha = "
-                                  f"{good.alpha:.8g}, theta at the clamp {good.theta_end:.8g}), before G "
-                                  f"reaches w = {c.w:g}: G = {good.G:.6g} there (the onset of delamination)",
-                                  f"solved states either side of it, to 1e-10 in {name}",
-                                  "lower w, or change the loading end",
-                                  {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
-                                   "a_max": c.a_max, "locator": lo})
+                _pinning_end(c, name, lo, good, "turns past vertical at the clamp (Case II beyond, outside the "
+                             f"model)", f"alpha = {good.alpha:.8g}, theta at the clamp {good.theta_end:.8g}")
         except ConvergenceError:
             pass
     return march(stage, values, x0)  # not shown to be the Case I limit: the march's own error
@@ -559,9 +553,14 @@ def _control_end(ctl, c, good, v_good, v_bad, why):
         else:
             return
     name = "d" if c.control == "displacement" else "p"
-    raise DomainError(f"the exact pinning branch ({c.slip}) {_END_WORDS[why]} at {name} = {lo:.10g} "
-                      f"(alpha = {good.alpha:.8g}, a = {good.a:.6g}), before G reaches w = {c.w:g}: "
-                      f"G = {good.G:.6g} there (the onset of delamination)",
+    _pinning_end(c, name, lo, good, _END_WORDS[why], f"alpha = {good.alpha:.8g}, a = {good.a:.6g}")
+
+
+def _pinning_end(c, name: str, lo: float, good, what: str, state: str):
+    """Raise the DomainError of a pinning branch that ends (``what``) at control or alpha ``lo`` before G
+    reaches w, bracketed by solved states to 1e-10; ``state`` describes the last solved one."""
+    raise DomainError(f"the exact pinning branch ({c.slip}) {what} at {name} = {lo:.10g} ({state}), before G "
+                      f"reaches w = {c.w:g}: G = {good.G:.6g} there (the onset of delamination)",
                       f"solved states either side of it, to 1e-10 in {name}",
                       "lower w, or change the loading end",
                       {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
@@ -639,15 +638,10 @@ def _delamination_end(stage, c, good, v_bad):
         pass
     except ConvergenceError:
         return
-    lo, hi = good.rho_a, v_bad
-    while abs(hi - lo) > 1e-10 * abs(lo):
-        mid = 0.5 * (lo + hi)
-        try:
-            good, lo = stage.solve(mid, stage.x(good)), mid
-        except PastVertical:
-            hi = mid
-        except ConvergenceError:
-            return
+    found = _bisect_case_one(stage, good, good.rho_a, v_bad)
+    if found is None:
+        return
+    good = found[1]
     raise DomainError(f"the exact delamination branch ({c.slip}) turns past vertical at the clamp at a = "
                       f"{good.a:.8g} (alpha = {good.alpha:.6g}, d = {good.d:.8g}), before detachment (Case II "
                       "beyond, outside the model)",
