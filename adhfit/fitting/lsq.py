@@ -120,17 +120,6 @@ class Parametrisation:
                 "force_offset": v.get("force_offset", 0.0) * self.f_scale,
                 "force_drift": v.get("force_drift", 0.0) * self.f_scale}
 
-    def jacobian_to_si(self, si: dict) -> np.ndarray:
-        """Diagonal d(SI)/d(internal) of the fitted parameters, in the order of :attr:`names`."""
-        d = [si["work_of_adhesion"], si["mu_h"]]
-        if self.fit_x_offset:
-            d.append(self.x_scale)
-        if self.fit_force_offset:
-            d.append(self.f_scale)
-        if self.fit_force_drift:
-            d.append(self.f_scale)
-        return np.array(d)
-
 
 def pull_off_term(gap: tuple[float, float, float], x_tp: float) -> float:
     """sqrt(-2 ln P): P the probability that the model's turning point ``x_tp`` lies in the pull-off gap.
@@ -219,6 +208,8 @@ class RawFit:
         (``dchisqr``, residual units): the ones the data cannot reject widen the intervals.
     won : str
         Which start (or row split) the optimum came from (for the diagnostics).
+    free : tuple of (str, float)
+        The free-split stage's optimum (before the row split was fixed): internal parameter names and values.
     """
 
     slip: str
@@ -230,6 +221,7 @@ class RawFit:
     starts: list
     alternatives: tuple = ()
     won: str = ""
+    free: tuple = ()
 
 
 def _perturbed(start: Start, par: Parametrisation) -> list[tuple[Start, str]]:
@@ -288,7 +280,7 @@ def drift_supported(model: CurveModel) -> bool:
 
 def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: bool | None = None,
              fit_force_offset: bool = True, fit_force_drift: bool | None = None, extra_starts: list[dict] = (),
-             n_runs: int = 2) -> RawFit:
+             n_runs: int = 2, known: RawFit | None = None) -> RawFit:
     """Fit W_ad, μh (and offsets) of one slip condition by least squares.
 
     Parameters
@@ -309,6 +301,10 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
         More starts in SI (e.g. the other slip condition's optimum); always minimised.
     n_runs : int
         How many of the scored data-based starts are minimised.
+    known : RawFit, optional
+        An earlier fit of the same model (this is a restart from another start): when the free-split
+        stage lands where ``known``'s did (every internal parameter within :data:`SAME_OPTIMUM`), the
+        fixed stage would repeat ``known``'s from the same points, and ``known`` is returned.
 
     Returns
     -------
@@ -326,7 +322,7 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     residual = residual_function(model, par, scale, sigma_est)
     base = data_start(model, fit_offset=fit_x_offset, fit_force_offset=fit_force_offset)
     scored = []
-    for s, label in _perturbed(base, par):
+    for s, label in _perturbed(base, par) if n_runs > 0 else ():
         r = residual(par.params(s))
         scored.append((float(r @ r), s, label))
     scored.sort(key=lambda t: t[0])
@@ -336,15 +332,29 @@ def fit_slip(model: CurveModel, *, sigma: float | None = None, fit_x_offset: boo
     runs = [Start({k: v for k, v in r.items() if k != "label"}) for r in runs]
     optima: list = []
     best, starts, won = _run_starts(residual, par, runs, scale_covar=sigma is None, labels=labels, optima=optima)
-    raw = RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale,
-                 sigma_given=sigma is not None, starts=starts, won=won)
+    others = [par.si(r.params) for r in optima if r is not best and r.chisqr <= CLOSE_OPTIMA * best.chisqr]
+    if known is not None and not model.fixed_split and not others and _same_optimum(best, known):
+        return known
+    raw = RawFit(slip=model.slip, best=best, model=model, par=par, scale=scale, sigma_given=sigma is not None,
+                 starts=starts, won=won, free=tuple((k, float(p.value)) for k, p in best.params.items()))
     if model.fixed_split:
         return raw
     # the row split of every start's optimum close to the best: the free split's χ² and the fixed split's
     # (with the pull-off term) need not rank two basins alike (a fit started from the other slip condition's
     # optimum detached 2 rows early, χ² 211 against 194 at the data's row)
-    others = [par.si(r.params) for r in optima if r is not best and r.chisqr <= CLOSE_OPTIMA * best.chisqr]
     return _refit_fixed(raw, sigma, sigma_est, base, others)
+
+
+#: a restart's free-split optimum within this of an earlier one in every internal parameter (O(1) units) is the same
+SAME_OPTIMUM = 1e-3
+
+
+def _same_optimum(best, known: RawFit) -> bool:
+    """Whether the free-split optimum ``best`` is where ``known``'s free stage ended (its fixed stage,
+    started from the same point, would only repeat ``known``'s)."""
+    there = dict(known.free)
+    return there.keys() == best.params.keys() and all(abs(p.value - there[k]) < SAME_OPTIMUM
+                                                      for k, p in best.params.items())
 
 
 def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start, others: list = ()) -> RawFit:
@@ -399,7 +409,7 @@ def _refit_fixed(raw: RawFit, sigma: float | None, sigma_est: float, base: Start
     near = [f for f in fits if f is not best and abs(f.model.segments.i_jump - best.model.segments.i_jump) == 1]
     alts = tuple(dict(f.par.si(f.best.params), dchisqr=float(f.best.chisqr - best.best.chisqr),
                       split=f.model.segments.i_jump) for f in near)
-    return dataclasses.replace(best, alternatives=alts)
+    return dataclasses.replace(best, alternatives=alts, free=raw.free)
 
 
 def _fixed_fit(raw: RawFit, j: int, sigma: float | None, sigma_est: float, base: Start, si: dict,

@@ -117,7 +117,8 @@ def _singles(problem, opts, segs, slips) -> dict:
             # the same model: its histories and its data-based start are kept
             again = fit_slip(models[first], sigma=opts.sigma, fit_x_offset=opts.fit_x_offset,
                              fit_force_offset=opts.fit_force_offset, fit_force_drift=opts.fit_force_drift, n_runs=0,
-                             extra_starts=[dict(other.par.si(other.best.params), label=f"the {slips[1]} optimum")])
+                             extra_starts=[dict(other.par.si(other.best.params), label=f"the {slips[1]} optimum")],
+                             known=done[first])
             if again.best.chisqr < done[first].best.chisqr * (1.0 - 1e-9):
                 done[first] = again
         for s in slips:

@@ -92,9 +92,6 @@ class CorrectedModel:
         diff = [self._difference(q) for q in stencil]
         self.c0 = diff[0]
         self.C = np.column_stack([(diff[1 + 2 * i] - diff[2 + 2 * i]) / (2 * h) for i, h in enumerate(self.steps)])
-        #: largest second-order term of the difference at one step from q0, N (how linear it is there)
-        self.curvature = float(max(np.max(np.abs(diff[1 + 2 * i] + diff[2 + 2 * i] - 2 * diff[0])) / 2
-                                   for i in range(3)))
 
     @staticmethod
     def _wmo(q: np.ndarray) -> tuple[float, float, float]:
