@@ -93,6 +93,18 @@ def replicate(job) -> dict:
         truth = W_AD if key == "w" else MU_H
         out[f"{key}_covers"] = None if ci is None else bool((ci[0] is None or ci[0] <= truth) and
                                                             (ci[1] is None or truth <= ci[1]))
+    # each slip condition's own fit (what an undecided fit hulls): its estimate, interval, χ² and nuisances
+    out["by_slip"] = {}
+    for s, f in r.fits.items():
+        one = {"chisqr": f.chisqr, "bic": f.bic, "ndata": f.ndata, "nvarys": f.nvarys, "sigma": f.sigma,
+               "nuisances": [k for k in f.parameters if k not in ("work_of_adhesion", "mu_h")],
+               # each profile side converged (a side that did not reports its nearest probe beyond the limit)
+               "profile_converged": {k: list(v.get("converged", [])) for k, v in f.profile.items()}}
+        for key, par in (("w", "work_of_adhesion"), ("mu", "mu_h")):
+            e = f.parameters[par]
+            one[f"{key}_value"] = e.value
+            one[f"{key}_ci"] = None if e.ci95 is None else [None if c is None else float(c) for c in e.ci95]
+        out["by_slip"][s] = one
     return out
 
 
@@ -143,15 +155,29 @@ def run(protocols, replicates: int, workers: int, seed: int = 1000, raw: list | 
             for cls, sel in (("decided", lambda r: r["selected"] is not None), ("undecided", lambda r: r["selected"] is None)):
                 ws = [r[key] for r in ok if r[key] is not None and sel(r)]
                 row[f"{key}_{cls}_n"] = len(ws)
+                row[f"{key}_{cls}_pred"] = pred[f"{key}_{cls}"]
+                row[f"{key}_{cls}_obs"] = float(np.median(ws)) if ws else math.nan
                 row[f"{key}_{cls}_ratio"] = pred[f"{key}_{cls}"] / float(np.median(ws)) if ws else math.nan
                 if len(ws) >= min(MIN_CLASS, len(rs)):
                     checks.append(abs(row[f"{key}_{cls}_ratio"] - 1) <= 0.2)
+            # a diagnostic, not the check: the undecided fits whose every W_ad/μh profile side converged (a side
+            # that does not reports its nearest probe beyond the limit, far out where the first probe overshot)
+            conv = [r[key] for r in ok if r[key] is not None and r["selected"] is None and _profiles_converged(r, key)]
+            row[f"{key}_undecided_converged_n"] = len(conv)
+            row[f"{key}_undecided_converged_ratio"] = pred[f"{key}_undecided"] / float(np.median(conv)) if conv else math.nan
         # the width model is checked where the verdict's class has enough fits: the decided fits' median against
         # the true condition's width, the undecided ones' against the hull of both conditions' intervals
         row["pass_width"] = bool(checks) and all(checks)
         row["pass_p"] = abs(row["p_pred"] - row["p_obs"]) <= 0.1
         rows.append(row)
     return rows
+
+
+def _profiles_converged(r: dict, key: str) -> bool:
+    """Whether both slip conditions' profiles of ``key`` converged on both sides (fits recorded with them)."""
+    par = {"w": "work_of_adhesion", "mu": "mu_h"}[key]
+    by = r.get("by_slip") or {}
+    return bool(by) and all(all(b.get("profile_converged", {}).get(par, [False])) for b in by.values())
 
 
 def _cls(r, key) -> str:
