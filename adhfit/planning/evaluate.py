@@ -141,11 +141,13 @@ def _other_widths_flipped(m_main, m_alt) -> dict | None:
 def _hull(v: dict, main: dict):
     """:func:`.hull.hull_model` of one nuisance set's variant (None without the other condition's fit); a set
     whose misfit is the main set's (its verdict not marginal) takes the main set's draws."""
-    m = v.get("m")
-    if m is None or m.J is None or m.widths is None:
+    m, probs = v.get("m"), v.get("probs")
+    if m is None or m.J is None or m.widths is None or probs is None:
         return None
     if v is not main and m is main.get("m"):
         return main.get("hull")
+    if 1.0 - probs["decided"] - probs["wrong"] < UNDECIDED_MIN:  # hardly ever undecided: the noiseless hull
+        return None
     t = v["truth"]
     try:
         return hull_model(v["r"], v["J_force"], t.values, v["widths"], m.r, m.J, m.values, m.widths, m.lam, m.n,

@@ -119,9 +119,9 @@ def hull_model(r_t: np.ndarray, J_t: np.ndarray, values_t: dict, widths_t: dict,
     b = B.T @ d
     rng = np.random.default_rng(seed)
     z = rng.standard_normal((draws, m))
-    zz = np.einsum("ij,ij->i", z, z)
-    zPt = np.einsum("ij,jk,ik->i", z, Pt, z)
-    zPw = np.einsum("ij,jk,ik->i", z, Pw, z)
+    zz = np.sum(z * z, axis=1)
+    zPt = np.sum((z @ Pt) * z, axis=1)
+    zPw = np.sum((z @ Pw) * z, axis=1)
     u = chisqr_true + zz - zPt + rng.chisquare(max(g - m, 1), draws)
     D = lam + 2.0 * (z @ b) + zPt - zPw
     D = np.maximum(D, -u * (1.0 - 1e-12))
