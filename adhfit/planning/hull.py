@@ -39,8 +39,10 @@ from .information import Z95
 
 __all__ = ["HullModel", "hull_model", "HULL_DRAWS", "HULL_SEED"]
 
-#: draws of the linearised noise (fixed seed: a plan is reproducible)
-HULL_DRAWS = 20_000
+#: draws of the linearised noise (fixed seed: a plan is reproducible).  The hull's scatter across replicates
+#: is a few per cent, so the median of the >= 80 undecided draws (P(undecided) >= 0.02) is precise to well
+#: under 1 %; against 20,000 draws the eight checked protocols' predictions differ by <= 0.05 % (5x the cost)
+HULL_DRAWS = 4_000
 HULL_SEED = 20261206
 #: the fewest undecided draws whose hull is summarised (fewer: the verdict is practically never undecided)
 MIN_UNDECIDED = 50
@@ -121,9 +123,9 @@ def hull_model(r_t: np.ndarray, J_t: np.ndarray, values_t: dict, widths_t: dict,
     z = rng.standard_normal((draws, m))
     zz = np.sum(z * z, axis=1)
     zPt = np.sum((z @ Pt) * z, axis=1)
-    zPw = np.sum((z @ Pw) * z, axis=1)
+    zPd = np.sum((z @ (Pt - Pw)) * z, axis=1)
     u = chisqr_true + zz - zPt + rng.chisquare(max(g - m, 1), draws)
-    D = lam + 2.0 * (z @ b) + zPt - zPw
+    D = lam + 2.0 * (z @ b) + zPd
     D = np.maximum(D, -u * (1.0 - 1e-12))
     dbic = n * np.log1p(D / u)
     dt, dw = z @ At.T, z @ Aw.T                # draws x k
