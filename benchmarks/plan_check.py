@@ -246,6 +246,45 @@ def table(rows: list[dict]) -> str:
     return out + "\n".join(lines) + "\n"
 
 
+def pieces(path: Path) -> str:
+    """The undecided hull's pieces, predicted against a run's undecided fits (its ``--json``): the other slip's
+    shift ln(W_other/W_true) (median of the hull's undecided draws) and each slip's W_ad limits (ln, relative to
+    its estimate; the main nuisance set's noiseless profile limits), against the medians over the fits."""
+    import json  # noqa: PLC0415
+    from adhfit.planning.evaluate import OTHER, _variant  # noqa: PLC0415
+    from adhfit.planning.hull import hull_model  # noqa: PLC0415
+    from adhfit.planning.information import jacobian  # noqa: PLC0415
+    from adhfit.planning.protocols import Protocol  # noqa: PLC0415
+    from adhfit.planning.truth import loading_end, noiseless_test  # noqa: PLC0415
+    reps = json.loads(Path(path).read_text(encoding="utf-8"))["replicates"]
+    out = ["| protocol | undecided fits | shift ln(W_other/W_true): pred / obs (sd) | true slip's W_ad limits [ln]: "
+           "pred / obs | other slip's W_ad limits [ln]: pred / obs [fits whose side converged] |", "|---|---|---|---|---|"]
+    md = lambda x: float(np.median(x))  # noqa: E731
+    for name, scene, end, value, slip, noise in PROTOCOLS:
+        rs = [r for r in reps if r["name"] == name and "error" not in r and r["selected"] is None and r.get("by_slip")]
+        if len(rs) < MIN_CLASS:
+            continue
+        o = OTHER[slip]
+        prot = Protocol(_scene(scene), end, value, ROWS, noise)
+        truth = noiseless_test(prot, slip, W_AD, MU_H, loading_end(prot, slip, W_AD, MU_H))
+        v = _variant(truth, slip, "large-stretch", None)
+        m = v["m"]
+        r_w, J_w, _ = jacobian(truth.model_of(o), truth.par, truth.sigma, m.values)
+        hm = hull_model(v["r"], v["J_force"], truth.values, v["widths"], r_w, J_w, m.values, m.widths, m.lam, m.n,
+                        m.chisqr_true, truth.model.curve.force.size)
+        shift = md(hm.shift["work_of_adhesion"][hm.undecided])
+        lnr = lambda r, s, i: math.log(r["by_slip"][s]["w_ci"][i] / r["by_slip"][s]["w_value"])  # noqa: E731
+        sh = [math.log(r["by_slip"][o]["w_value"] / r["by_slip"][slip]["w_value"]) for r in rs]
+        conv = [[r for r in rs if r["by_slip"][o]["profile_converged"]["work_of_adhesion"][i]] for i in (0, 1)]
+        it, iw = v["widths"]["work_of_adhesion"]["interval"], m.widths["work_of_adhesion"]["interval"]
+        out.append(f"| {name} | {len(rs)} | {shift:+.4f} / {md(sh):+.4f} ({np.std(sh):.4f}) | "
+                   f"({it[0]:+.4f}, {it[1]:+.4f}) / ({md([lnr(r, slip, 0) for r in rs]):+.4f}, "
+                   f"{md([lnr(r, slip, 1) for r in rs]):+.4f}) | ({iw[0]:+.4f}, {iw[1]:+.4f}) / "
+                   f"({md([lnr(r, o, 0) for r in conv[0]]):+.4f} [{len(conv[0])}], "
+                   f"{md([lnr(r, o, 1) for r in conv[1]]):+.4f} [{len(conv[1])}]) |")
+    return "\n".join(out) + "\n"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--replicates", type=int, default=30)
@@ -257,7 +296,12 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=Path, default=None, help="write every replicate's fit summary here")
     ap.add_argument("--distinct-seeds", action="store_true",
                     help="independent noise per protocol (seed + 1000 x its index + k), not the same seeds in each")
+    ap.add_argument("--pieces", type=Path, default=None,
+                    help="print the undecided hull's pieces, predicted against this run's --json, and stop")
     args = ap.parse_args(argv)
+    if args.pieces is not None:
+        print(pieces(args.pieces))
+        return 0
     t0 = time.perf_counter()
     protocols = QUICK if args.quick else PROTOCOLS
     if args.only:
