@@ -22,6 +22,7 @@ from ..fitting.membrane import EXACT_POINTS, approximation_effect
 from ..fitting.starts import Start
 from .information import (Z95, jacobian, log_widths, profile_widths_fit, radius_jacobian, reduced_information,
                           with_drift_flipped)
+from .hull import hull_model
 from .protocols import Protocol
 from .truth import OutOfDomain, drift_probability, loading_end, noiseless_test
 from .verdict import UNDECIDED_MIN, misfit, profile_other, verdict_probabilities
@@ -53,46 +54,106 @@ def _interval(value: float, rel_se: float, limits: tuple | None = None) -> tuple
     return value * math.exp(-Z95 * rel_se), value * math.exp(Z95 * rel_se)
 
 
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    order = np.argsort(values)
+    cum = np.cumsum(weights[order])
+    return float(values[order][min(np.searchsorted(cum, 0.5 * cum[-1]), values.size - 1)])
+
+
 def reported_widths(parts: list) -> dict:
     """The width the fit reports, as a distribution over its verdict (:func:`adhfit.fitting.stage.reported`):
     the true condition's interval when it is selected, the other's when that is, and otherwise the hull of
     both (the two optima differ, so an undecided verdict widens the interval).
 
-    ``parts``: ``(weight, widths, truth values, misfit, verdict probabilities)`` of each nuisance set the fit
-    may use (with and without the drift, :func:`.truth.drift_probability`), weights summing to 1.
+    ``parts``: ``(weight, widths, truth values, misfit, verdict probabilities, hull model)`` of each nuisance
+    set the fit may use (with and without the drift, :func:`.truth.drift_probability`), weights summing to 1;
+    the hull model (:func:`.hull.hull_model`, or None) gives the undecided hull's distribution under the
+    noise that leaves the verdict undecided; without it (or with too few undecided draws) the hull of the
+    two noiseless intervals stands for it.
 
-    Returns, per parameter, ``decided``, ``undecided`` (the hull), ``mean`` (over the verdict's
-    probabilities: the expected width) and ``median`` widths (SI); ``decided`` and ``undecided`` are the
-    weighted means over the parts.
+    Returns, per parameter: ``decided`` (the true condition's width, over the sets in proportion to how often
+    each decides), ``undecided`` (the median hull of the undecided fits, the sets in proportion to how often
+    each is undecided), ``undecided_noiseless`` (the hull of the noiseless intervals, what was predicted
+    before the hull model), ``mean`` (the expected width over the verdict's probabilities) and ``median`` (the
+    median of that mixture distribution: the decided and wrong widths as points, the hull as its draws).
     """
     out = {}
     for name in parts[0][1]:
-        points, dec, und = [], 0.0, 0.0
-        for weight, widths, truth, m, probs in parts:
+        vals, wts = [], []  # the mixture distribution of the reported width
+        dec_w, dec_p, und_vals, und_wts, noiseless, noiseless_p = 0.0, 0.0, [], [], 0.0, 0.0
+        for weight, widths, truth, m, probs, hull in parts:
             w = widths[name]
             own = w["width"]
             p_true, p_wrong = probs["decided"], probs["wrong"]
             p_und = max(1.0 - p_true - p_wrong, 0.0)
-            if m.widths is None or not math.isfinite(own):
-                points.append((own, weight))
-                dec, und = dec + weight * own, und + weight * own
+            if m is None or m.widths is None or not math.isfinite(own):
+                vals.append(np.array([own]))
+                wts.append(np.array([weight]))
+                dec_w, dec_p = dec_w + weight * own, dec_p + weight
+                und_vals.append(np.array([own]))
+                und_wts.append(np.array([weight * max(p_und, 1e-12)]))
+                noiseless, noiseless_p = noiseless + weight * own, noiseless_p + weight
                 continue
             other = m.widths[name]["width"]
             lo_t, hi_t = _interval(truth[name], w["relative_se"], w.get("interval"))
             lo_w, hi_w = _interval(m.values[name], m.widths[name]["relative_se"], m.widths[name].get("interval"))
-            hull = max(hi_t, hi_w) - min(lo_t, lo_w)
-            points += [(own, weight * p_true), (other, weight * p_wrong), (hull, weight * p_und)]
-            dec, und = dec + weight * own, und + weight * hull
-        points.sort()
-        cum, median = 0.0, points[-1][0]
-        for value, p in points:
-            cum += p
-            if cum >= 0.5:
-                median = value
-                break
-        mean = sum(v * p for v, p in points) if all(math.isfinite(v) for v, _ in points) else math.inf
-        out[name] = {"decided": dec, "undecided": und, "mean": mean, "median": median}
+            flat = max(hi_t, hi_w) - min(lo_t, lo_w)
+            draws = hull.undecided_hulls(name) if hull is not None and name in hull.hulls else None
+            if draws is None:
+                draws = np.array([flat])
+            vals += [np.array([own]), np.array([other]), draws]
+            wts += [np.array([weight * p_true]), np.array([weight * p_wrong]),
+                    np.full(draws.size, weight * p_und / draws.size)]
+            dec_w, dec_p = dec_w + weight * max(p_true, 1e-12) * own, dec_p + weight * max(p_true, 1e-12)
+            und_vals.append(draws)
+            und_wts.append(np.full(draws.size, weight * max(p_und, 1e-12) / draws.size))
+            noiseless, noiseless_p = noiseless + weight * max(p_und, 1e-12) * flat, noiseless_p + weight * max(p_und, 1e-12)
+        v, wt = np.concatenate(vals), np.concatenate(wts)
+        finite = np.all(np.isfinite(v[wt > 0]))
+        mean = float(np.sum(v * wt) / np.sum(wt)) if finite else math.inf
+        median = _weighted_median(v, wt) if np.sum(wt) > 0 else float(v[0])
+        uv, uw = np.concatenate(und_vals), np.concatenate(und_wts)
+        out[name] = {"decided": dec_w / dec_p, "undecided": _weighted_median(uv, uw), "mean": mean,
+                     "median": median, "undecided_noiseless": noiseless / noiseless_p}
     return out
+
+
+def _other_widths_flipped(m_main, m_alt) -> dict | None:
+    """The other condition's widths under the other nuisance set: its covariance widths, W_ad's profile limits
+    (where the main set has them) scaled by the ratio of the two sets' Fisher standard errors of ln W_ad at
+    the other condition's optimum, as the true condition's are."""
+    if m_alt.widths is None or m_main.widths is None or m_alt.J is None or m_main.J is None:
+        return m_alt.widths
+    wm = m_main.widths["work_of_adhesion"]
+    if wm.get("method") != "profile":
+        return m_alt.widths
+    se_main = log_widths(m_main.J, m_main.values)["work_of_adhesion"]["relative_se"]
+    se_alt = log_widths(m_alt.J, m_alt.values)["work_of_adhesion"]["relative_se"]
+    if not (se_main > 0 and math.isfinite(se_main) and math.isfinite(se_alt)):
+        return m_alt.widths
+    scale = se_alt / se_main
+    lo, hi = scale * wm["interval"][0], scale * wm["interval"][1]
+    v = m_alt.values["work_of_adhesion"]
+    return {**m_alt.widths, "work_of_adhesion": {"width": v * (math.exp(hi) - math.exp(lo)), "relative_se":
+                                                 (hi - lo) / (2 * Z95), "interval": (lo, hi), "method": "profile"}}
+
+
+def _hull(v: dict, main: dict):
+    """:func:`.hull.hull_model` of one nuisance set's variant (None without the other condition's fit); a set
+    whose misfit is the main set's (its verdict not marginal) takes the main set's draws."""
+    m, probs = v.get("m"), v.get("probs")
+    if m is None or m.J is None or m.widths is None or probs is None:
+        return None
+    if v is not main and m is main.get("m"):
+        return main.get("hull")
+    if 1.0 - probs["decided"] - probs["wrong"] < UNDECIDED_MIN:  # hardly ever undecided: the noiseless hull
+        return None
+    t = v["truth"]
+    try:
+        return hull_model(v["r"], v["J_force"], t.values, v["widths"], m.r, m.J, m.values, m.widths, m.lam, m.n,
+                          m.chisqr_true, t.model.curve.force.size)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
 
 
 def _variant(truth, slip, chosen, radius_noise, *, verdict: bool = True, profile: bool = True,
@@ -202,15 +263,22 @@ def _one_slip(protocol, slip, w, mu, x_max, membrane, radius_noise=None, hint: d
             if "fisher_width" in wm and wm["fisher_width"] > 0:
                 ratio = wm["width"] / wm["fisher_width"]
                 wa = alt["widths"]["work_of_adhesion"]
+                # the profile's limits, scaled from the main set's Fisher half-width to this set's
+                scale = wa["relative_se"] / wm["fisher_relative_se"]
                 alt["widths"]["work_of_adhesion"] = {**wa, "width": wa["width"] * ratio,
                                                      "relative_se": wa["relative_se"] * ratio,
-                                                     "interval": tuple(ratio * np.asarray(wm["interval"]))}
+                                                     "interval": tuple(scale * np.asarray(wm["interval"]))}
+            if marginal:
+                alt["m"].widths = _other_widths_flipped(main["m"], alt["m"])
             parts = [(share, main), (1.0 - share, alt)]
+    for _, v in parts:  # the hull an undecided fit reports, under the noise that leaves it undecided
+        v["hull"] = _hull(v, main)
     if len(parts) == 1:
         probs = main["probs"]
     else:
         probs = verdict_probabilities([v["m"] for _, v in parts], [wt for wt, _ in parts])
-    reported = reported_widths([(wt, v["widths"], v["truth"].values, v["m"], v["probs"]) for wt, v in parts])
+    reported = reported_widths([(wt, v["widths"], v["truth"].values, v["m"], v["probs"], v["hull"])
+                                for wt, v in parts])
     widths = {name: dict(main["widths"][name], width=sum(wt * v["widths"][name]["width"] for wt, v in parts))
               for name in main["widths"]}
     m, J = main["m"], main["J"]

@@ -65,6 +65,8 @@ class Misfit:
     """
 
     widths = None
+    #: the other condition's residual and Jacobian at its optimum (:func:`.information.jacobian`), when known
+    r = J = None
 
     def __init__(self, lam: float, linear_var: float, quadratic_var: float, n: int, k: int, chisqr_true: float,
                  values: dict | None = None) -> None:
@@ -137,6 +139,8 @@ def misfit(truth, other_slip: str, r_true: np.ndarray, J_true: np.ndarray) -> Mi
         lin, quad, other_widths = 4.0 * lam, 0.0, None
     out = Misfit(lam, lin, quad, r_true.size, k, chi_t, values)
     out.widths = other_widths
+    if other_widths is not None:  # the linearised fit of the other condition (:mod:`.hull`)
+        out.r, out.J = r_w, J_w
     return out
 
 
