@@ -201,6 +201,8 @@ def history(control: str, slip: str, *, p: float | None = None, d: float | None 
         failures.append((pts, int(status), err.copy()))
         limit = (_case_one_end(err, v, c, pc, slip == "no-slip", float(a_m), _grids(pts)[0])
                  if status == K.H_FOLLOW else None)
+        if limit is None and status == K.H_FOLLOW and slip == "frictionless":
+            limit = _equator_end(err, v, c, pc, float(a_m), _grids(pts)[0])
         if limit is not None:
             break  # the branch's own end, shown by a second method: no other grid changes it
         if status in (K.H_END_UNREACHABLE, K.H_MC_PRESSURE, K.H_MC_STATE):
@@ -289,6 +291,23 @@ def _case_one_end(err, v, c, pc, no_slip, a_m, u_mc):
                         float(out_mc[6, -1]), d_fix)
 
 
+def _equator_end(err, v, c, pc, a_m, u_mc):
+    """A frictionless pinning stall at the sphere's equator (a = rs), confirmed by a solve there
+    (:func:`.core.limit.equator_end`): its ``EquatorEnd``, or None."""
+    from .core.continuation import F_STALLED  # noqa: PLC0415 - compiled kernels on first use
+    from .core.limit import equator_end  # noqa: PLC0415
+    if int(err[1]) != F_STALLED or int(err[0]) != 1 or c <= 0:
+        return None
+    d_fix = float(v["d"]) if pc else 0.0
+    p_cr = float(critical_pressure(d_fix)) if pc else 0.0
+    _, out_mc, st = K._making_contact(pc, c, 0.0 if pc else float(v["p"]), d_fix, p_cr, a_m * u_mc,
+                                      np.full(5, math.nan))
+    if st != K.H_OK:
+        return None
+    return equator_end(pc, float(err[4]), float(err[3]), float(err[2]), c, float(v["w"]), a_m,
+                       float(out_mc[6, -1]), d_fix)
+
+
 def _raise(failures, v, info, c, pc, limit=None):
     """Word the failure the kernel reports on every row grid tried (``failures``: (points, status,
     err) each, see core.history): an InputError for a loading end beyond the branch, a DomainError
@@ -297,6 +316,15 @@ def _raise(failures, v, info, c, pc, limit=None):
     ConvergenceError naming the grids tried."""
     slip = info["slip"]
     pts, status, err = failures[0]
+    if limit is not None and not hasattr(limit, "sigma"):  # the sphere's equator (core.limit.EquatorEnd)
+        raise DomainError(f"the pinning branch ({slip}) reaches the sphere's equator (a = rs = "
+                          f"{v['rs']:.8g}) at alpha = {limit.loc:.8g}, before G reaches w (the onset of "
+                          f"delamination), at p = {limit.kappa:.8g}: past it the contact edge would run "
+                          "onto the far side of the sphere, outside the model",
+                          f"the continuation stops at alpha = {float(failures[-1][2][2]):.8g} (a = "
+                          f"{float(failures[-1][2][4]):.10g}) and a direct solve at a = rs finds it there",
+                          "lower w, raise rs, or lower a_max",
+                          {**info, "locator": limit.loc, "kappa": limit.kappa})
     if limit is not None:
         stage = _STAGE_OF[int(failures[-1][2][0])]
         name = _locator_name(stage, slip)

@@ -10,12 +10,13 @@ import math
 
 import numpy as np
 
-from .branches import admissible, is_implicit, observe
+from .branches import PIN_NS, admissible, is_implicit, observe
 from .jit import jit
-from .solve import solve_one
+from .newton import STEP
+from .solve import derivative_row, solve_one
 
-__all__ = ["F_OK", "F_STALLED", "F_STEPS", "GAP_CLOSE", "SCALE_LINEAR", "SCALE_LOG", "SCALE_SQRT",
-           "follow", "max_steps"]
+__all__ = ["F_OK", "F_STALLED", "F_STEPS", "GAP_CLOSE", "JUMP", "JUMP_FLOOR", "SCALE_LINEAR", "SCALE_LOG",
+           "SCALE_SQRT", "follow", "max_steps"]
 
 F_OK, F_STALLED, F_STEPS = 0, 1, 2
 #: a gap to the goal within this relative distance is closed in one step
@@ -24,6 +25,16 @@ GAP_CLOSE = 1e-12
 SHORT_UNTIL = 1e-8
 #: step variables of follow: the locator, its logarithm, its square root
 SCALE_LINEAR, SCALE_LOG, SCALE_SQRT = 0, 1, 2
+#: a solved step whose root lies farther from its predictor than JUMP times the change the predictor
+#: made (plus JUMP_FLOOR, relative) is taken for another branch's root and halved. Near the start of
+#: a frictionless pinning branch a second branch can run close by (issue 24, stress scene 0.283:
+#: under pressure control at rs = 0.040, a_max = 0.035 a branch from a = 0.0355 at alpha = 0 that
+#: ends on the sphere's equator); a first step of span/16 from a constant predictor converged onto
+#: it, so the history depended on the row grid. On a smooth branch the predictor's error is O(h^2)
+#: of the change (linear, quadratic predictor), so the test only shortens steps where the branch
+#: bends within one step.
+JUMP = 0.5
+JUMP_FLOOR = 1e-9
 
 
 @jit
@@ -49,6 +60,38 @@ def _from_step(scale, s):
     if scale == SCALE_SQRT:
         return s * s
     return s
+
+
+@jit
+def _tangent(code, pressure, scale, l0, x0, k0, c, w, a_m, L_m):
+    """(dx/ds, dkappa/ds) at the solved start of a branch in the step variable s, by complex steps
+    (:func:`.solve.derivative_row`); NaN where not finite or not defined (no-slip pinning at G = 0,
+    where x is smooth in sqrt(G) only)."""
+    if code == PIN_NS and l0 == 0.0:
+        return math.nan, math.nan
+    xc, kc = derivative_row(code, pressure, l0, x0, k0, c, w, a_m, L_m)
+    if scale == SCALE_LOG:
+        dl = l0
+    elif scale == SCALE_SQRT:
+        dl = 2.0 * math.sqrt(l0)
+    else:
+        dl = 1.0
+    tx = xc.imag / STEP * dl if is_implicit(code) else 0.0
+    tk = kc.imag / STEP * dl if pressure else 0.0
+    if not (math.isfinite(tx) and math.isfinite(tk)) or (tx == 0.0 and tk == 0.0):
+        return math.nan, math.nan
+    return tx, tk
+
+
+@jit
+def _near(implicit, pressure, x, k, xp, kp, x_last, k_last):
+    """Whether a solved state (x, k) lies within JUMP of the change the prediction (xp, kp) made
+    from the last state (plus JUMP_FLOOR); x and kappa weighted by 1/(1 + |.|)."""
+    wx = 1.0 / (1.0 + abs(x)) if implicit else 0.0
+    wk = 1.0 / (1.0 + abs(k)) if pressure else 0.0
+    pred = max(abs(xp - x_last) * wx if implicit else 0.0, abs(kp - k_last) * wk)
+    corr = max(abs(x - xp) * wx if implicit else 0.0, abs(k - kp) * wk)
+    return corr <= JUMP * pred + JUMP_FLOOR
 
 
 @jit
@@ -105,6 +148,11 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
     if span == 0.0:
         span = 1.0
     h = span / 16.0
+    # the tangent at the start: the first step (from the start itself) is checked against it;
+    # later, the tangent at the last state (t_m: the state count it was taken at)
+    tx, tk = _tangent(code, pressure, scale, l0, xs[0], k0, c, w, a_m, L_m)
+    t_m = 1
+    solved = implicit or pressure
     i, steps, n_out, status = 0, 0, 0, F_OK
     obs = np.empty(7)
     last_obs = np.full(7, math.nan)
@@ -131,6 +179,24 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
         if good:
             # every observable finite: at the Case I limit J0 can be finite where the gap is not
             good = admissible(observe(code, x, k, loc, c, w, a_m, obs), obs)
+        if good and solved and m > 1:
+            # the root must be the one the predictor points at, not another branch's: held to the
+            # polynomial predictor, else to the tangent at the last state (a polynomial through
+            # states before a bend errs in proportion to the step, however short)
+            good = _near(implicit, pressure, x, k, xg, kg, xs[m - 1], ks[m - 1])
+            if not good:
+                if t_m != m:
+                    tx, tk = _tangent(code, pressure, scale, _from_step(scale, ss[m - 1]), xs[m - 1],
+                                      ks[m - 1], c, w, a_m, L_m)
+                    t_m = m
+                good = math.isfinite(tx) and _near(implicit, pressure, x, k,
+                                                   xs[m - 1] + tx * (s_new - ss[m - 1]),
+                                                   ks[m - 1] + tk * (s_new - ss[m - 1]),
+                                                   xs[m - 1], ks[m - 1])
+        elif good and solved and math.isfinite(tx):
+            # the first step, solved from the start itself: held to the tangent's prediction
+            good = _near(implicit, pressure, x, k, xs[0] + tx * (s_new - ss[0]),
+                         ks[0] + tk * (s_new - ss[0]), xs[0], ks[0])
         if not good:
             # halved until the step changes: a step that closed the gap to the goal stays that
             # step while the halved h still spans the gap, and would be solved again as it was

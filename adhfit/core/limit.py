@@ -25,7 +25,7 @@ import numpy as np
 from .branches import CLAMP_NEAR, is_implicit, material_target, state, unpack
 from .membrane import substrate_cos
 
-__all__ = ["NEAR", "CaseOneEnd", "clamp_sine", "case_one_end"]
+__all__ = ["NEAR", "CaseOneEnd", "clamp_sine", "case_one_end", "EQUATOR_NEAR", "EquatorEnd", "equator_end"]
 
 #: a stalled state within this of |sin theta(1)| = 1 is taken to the limit solve
 NEAR = CLAMP_NEAR
@@ -242,3 +242,79 @@ def _edge_ok(code, x, kappa, loc, c, w, a_m):
         if state(code, x if is_implicit(code) else 0.0, k, loc, c, w, a_m, False)[6]:
             return True
     return False
+
+
+# ----------------------------------------------------------------------------------------------
+# the sphere's equator: frictionless pinning whose contact edge reaches a = rs
+
+#: a stalled frictionless pinning state whose contact radius lies within this (relative) of rs is
+#: taken to the equator solve (the unknown a is bracketed below (1 - 1e-9) rs)
+EQUATOR_NEAR = 1e-6
+
+
+@dataclass(frozen=True)
+class EquatorEnd:
+    """The state where frictionless pinning's contact edge reaches the sphere's equator (a = rs).
+
+    Attributes
+    ----------
+    loc, kappa : float
+        Contact angle alpha and pressure there.
+    residual : float
+        Largest residual of the equations at the solution.
+    """
+
+    loc: float
+    kappa: float
+    residual: float
+
+
+def equator_end(pressure: bool, x0: float, kappa0: float, loc0: float, c: float, w: float, a_m: float,
+                L_m: float, d_fix: float) -> EquatorEnd | None:
+    """Where a stalled frictionless pinning branch reaches the sphere's equator, solved there.
+
+    Frictionless pinning keeps the contact region on the substrate, a <= rs: the contact edge on the
+    equator (a = rs, the substrate's tangent vertical) is the model's end; past it the edge would run
+    onto the sphere's far side (a falling again at a growing substrate angle), which the model does
+    not describe. A continuation in alpha meets it tangentially (rs - a falls as the square of the
+    distance in alpha, the substrate angle crossing pi/2 transversally), so it stalls just short of
+    it. The second method solves the branch's equations at a = rs itself, where they are regular in
+    the remaining unknowns: alpha (and the pressure under pressure control) from the material
+    condition J0 = L_m (and the gap), scipy's ``hybr`` from the stalled state. It confirms the stall
+    (returns the state) when the stalled radius lies within EQUATOR_NEAR of rs, the solve's residuals
+    are within 1e-10 and its alpha within AGREE of the stall's; else None.
+    """
+    from scipy.optimize import root  # noqa: PLC0415 - only on the way to an error
+
+    from .branches import PIN_FR  # noqa: PLC0415
+
+    if not (c > 0 and all(math.isfinite(v) for v in (x0, kappa0, loc0))):
+        return None
+    rs = 1.0 / c
+    if not x0 >= (1.0 - EQUATOR_NEAR) * rs:
+        return None
+    a_eq = rs * (1.0 - 1e-15)  # (a c)^2 <= 1 in floating point
+
+    def equations(z):
+        loc, kappa = z[0], (z[1] if pressure else kappa0)
+        st = state(PIN_FR, a_eq, kappa, loc, c, w, a_m, True)
+        if not st[6]:
+            return np.full(len(z), np.nan)
+        out = [float(st[5]) - L_m]
+        if pressure:
+            out.append(float(st[2]) - d_fix)
+        return np.array(out)
+
+    z0 = np.array([loc0, kappa0]) if pressure else np.array([loc0])
+    try:
+        sol = root(equations, z0, method="hybr", options={"xtol": 1e-13})
+        res = equations(sol.x)
+    except (ValueError, ZeroDivisionError, OverflowError):
+        return None
+    if not (np.all(np.isfinite(res)) and float(np.max(np.abs(res))) <= 1e-10):
+        return None
+    loc = float(sol.x[0])
+    if abs(loc - loc0) > AGREE * max(1.0, abs(loc0)):
+        return None
+    return EquatorEnd(loc=loc, kappa=float(sol.x[1]) if pressure else float(kappa0),
+                      residual=float(np.max(np.abs(res))))

@@ -14,7 +14,7 @@ from .branches import MC, bracket, material_residual, state
 from .jit import jit
 
 __all__ = ["OK", "FAIL_BRACKET", "FAIL_INNER", "FAIL_OUTER", "STEP", "XTOL", "MAXITER",
-           "JOINT_MAXITER", "CHORD_RATE", "ACCEPT", "R_MATERIAL", "R_MC_GAP", "R_MC_RADIUS", "bracketed",
+           "JOINT_MAXITER", "CHORD_RATE", "ACCEPT", "NOISE", "R_MATERIAL", "R_MC_GAP", "R_MC_RADIUS", "bracketed",
            "damped_step", "inner_one", "stop", "gap_from", "mc_gap", "mc_bracketed",
            "mc_pressure_rows"]
 
@@ -34,6 +34,11 @@ CHORD_RATE = 0.01
 #: continuation then walked along the limit and stalled there); a true root's residual is ~1e-13
 #: even next to the limit (measured 1.6e-11 for the gap, 8e-13 for J0)
 ACCEPT = 1e-8
+#: a residual (J0 - target, O(1)) this small that has stopped falling is a root at rounding level
+#: (:func:`_newton_free`): next to a fold of the material condition in x its slope is small and the
+#: step, rounding / slope, stays above XTOL (issue-24 stress scene 8535: slope 0.013, steps ~3e-14
+#: against XTOL 5e-15, 60 iterations, then no root)
+NOISE = 1e-13
 #: residuals of :func:`bracketed`: the material condition in x, the making-contact gap in kappa,
 #: the making-contact gap in the radius a (at fixed kappa)
 R_MATERIAL, R_MC_GAP, R_MC_RADIUS = 0, 1, 2
@@ -136,14 +141,23 @@ def _newton_free(code, kappa, loc, c, w, a_m, L_m, x0):
     """
     kc, lc = complex(kappa, 0.0), complex(loc, 0.0)
     x = last_good = x0
+    r_prev = math.inf
     for _ in range(MAXITER):
         z = material_residual(code, complex(x, STEP), kc, lc, c, w, a_m, L_m)
         xn, gn, done = damped_step(x, last_good, z.real, z.imag / STEP)
         if done:
             # a vanishing step at the Case I limit is not a root (ACCEPT)
             return (xn, OK) if abs(z.real) <= ACCEPT else (math.nan, FAIL_INNER)
+        r = abs(z.real)
+        if r <= NOISE and r >= 0.5 * r_prev:
+            # the residual has stopped falling at rounding level while the step stays above XTOL:
+            # a root where the material condition is flat in x (next to a fold of it), known to
+            # rounding / slope; this iterate is it
+            return x, OK
         if xn == x and gn == last_good:
             return math.nan, FAIL_INNER
+        if math.isfinite(r):
+            r_prev = r
         x, last_good = xn, gn
     return math.nan, FAIL_INNER
 

@@ -42,7 +42,8 @@ def _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w, 
         lo, hi = min(lo, hi), max(lo, hi)
     else:
         lo, hi = locs[i], locs[i]
-    st, loc, obs, ok = extremum(code, pressure, lo, hi, rl, rx, rk, 0.0 if pressure else kappa_dc,
+    # the best row's own slope too: with the bracket's ends it tells on which side the extremum is
+    st, loc, obs, ok = extremum(code, pressure, lo, hi, locs[i], rl, rx, rk, 0.0 if pressure else kappa_dc,
                                 c, w, a_m, L_m, d_fix, key, sign, BRENT_XTOL, BRENT_RTOL,
                                 BRENT_MAXITER)
     if st == E_OK and not admissible(ok, obs):
@@ -101,7 +102,7 @@ def _rises_at_once(pressure, pin, kappa_dc, c, w, a_m, L_m, d_fix, key, sign, en
     if implicit:
         rx[0] = 1.0 if code == PIN_NS else a_m
         rx[1:] = xs[:m]
-    st, loc, obs, ok = extremum(code, pressure, eps, eps, rl, rx, rk, 0.0 if pressure else kappa_dc, c,
+    st, loc, obs, ok = extremum(code, pressure, eps, eps, math.nan, rl, rx, rk, 0.0 if pressure else kappa_dc, c,
                                 w, a_m, L_m, d_fix, key, sign, BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER)
     v0 = sign * end_obs[key]
     return st == E_OK and admissible(ok, obs) and sign * obs[key] < v0 - TURN_TOL * (1.0 + abs(v0))
@@ -126,7 +127,7 @@ def _past_onset(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, key, s
         rx[m] = pin_x[n_pin - 1]
     elif implicit:
         rx[m] = rx[m - 1]
-    st, loc, obs, ok = extremum(code, pressure, min(a_on, locs[0]), max(a_on, locs[0]), rl, rx, rk,
+    st, loc, obs, ok = extremum(code, pressure, min(a_on, locs[0]), max(a_on, locs[0]), math.nan, rl, rx, rk,
                                 0.0 if pressure else kappa_dc, c, w, a_m, L_m, d_fix, key, sign,
                                 BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER)
     if st == E_OK and not admissible(ok, obs):
