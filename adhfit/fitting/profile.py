@@ -34,6 +34,8 @@ MAX_SUBFITS = 8
 #: both stay below this fraction of the critical sqrt(D)
 FLAT_Q = 0.1
 FLAT_STEPS = 5.0
+#: a limit bracketed between probes this close (relative to the inner probe's offset) is found
+BRACKET = 0.01
 #: largest first step of a profile, internal units (a factor e in W_ad or μh)
 MAX_FIRST_STEP = 1.0
 #: tolerance of the sub-fits (see lsq.minimise)
@@ -148,6 +150,12 @@ def _side(residual, best, name, direction, crit, s2, scale_covar, realign=None) 
         tried.append((value - theta0, q))
         if abs(q - 1.0) < TOL:
             return ProfileLimit(value, k + 1, True, better, nfev, gain=gain, better=where)
+        bracket = _bracket(tried)
+        if bracket is not None and abs(bracket[1][0] - bracket[0][0]) <= BRACKET * abs(bracket[0][0]):
+            # χ² jumps across the critical value between two probes this close (the model's pull-off crossing
+            # a row): the limit is the jump; the probe beyond it is the (conservative) limit
+            return ProfileLimit(theta0 + bracket[1][0], k + 1, True, better, nfev, outer=theta0 + bracket[1][0],
+                                gain=gain, better=where)
         if value in (lo, hi) and q < 1.0:
             return ProfileLimit(value, k + 1, False, better, nfev, open=True, gain=gain, better=where)
         if len(tried) >= 2 and all(p[1] < FLAT_Q for p in tried[-2:]) and abs(t) > FLAT_STEPS * se:
@@ -161,14 +169,33 @@ def _side(residual, best, name, direction, crit, s2, scale_covar, realign=None) 
                         open=not above and (hit_domain or far or not tried), outer=outer, gain=gain, better=where)
 
 
-def _next_step(tried, direction, se):
-    """Next offset from the optimum: regula falsi in q = sqrt(D/crit) once the limit is bracketed,
-    else the line through the origin and the last probe (growth at most 4x)."""
+def _bracket(tried):
+    """The innermost probe above the critical value and the outermost below it, or ``None``."""
     below = [(t, q) for t, q in tried if q < 1.0]
     above = [(t, q) for t, q in tried if q >= 1.0]
-    if below and above:
-        (t0, q0) = max(below, key=lambda p: abs(p[0]))
-        (t1, q1) = min(above, key=lambda p: abs(p[0]))
+    if not (below and above):
+        return None
+    return max(below, key=lambda p: abs(p[0])), min(above, key=lambda p: abs(p[0]))
+
+
+def _next_step(tried, direction, se):
+    """Next offset from the optimum.  Once the limit is bracketed: the secant through the two outermost
+    probes below it, where that lands inside the bracket (sqrt(D) is near-linear on the optimum's side,
+    and its chord's root lies just beyond the limit where it bends up), else regula falsi between the
+    bracket's ends.  Regula falsi alone kept a far first probe as one end and crept toward the limit
+    from the other (sqrt(D) rose from 0.9 to 74 across the bracket): eight sub-fits ended 10 % short and
+    the far probe became the reported bound.  Before a bracket: the line through the origin and the last
+    probe (growth at most 4x)."""
+    bracket = _bracket(tried)
+    if bracket is not None:
+        (t0, q0), (t1, q1) = bracket
+        lo, hi = sorted((t0, t1))
+        below = sorted((p for p in tried if p[1] < 1.0), key=lambda p: abs(p[0]))[-2:]
+        if len(below) == 2 and below[1][1] != below[0][1]:
+            (ta, qa), (tb, qb) = below
+            t = tb + (1.0 - qb) * (tb - ta) / (qb - qa)
+            if lo < t < hi:
+                return t
         return t0 + (1.0 - q0) * (t1 - t0) / (q1 - q0)
     t1, q1 = tried[-1]
     return t1 / q1 if q1 > 0.25 else 4.0 * t1

@@ -72,7 +72,11 @@ def _diagnostics(fit, est: dict, limits: dict) -> list[str]:
             out.append(f"the likelihood profile of {name} stays below the critical value on one side "
                        f"(to the parameter's bound or the model's domain): status {e.status}")
         elif not (lo.converged and hi.converged):
-            out.append(f"the likelihood profile of {name} did not converge; its interval is from the covariance")
+            if lo.bound is not None and hi.bound is not None:
+                out.append(f"the likelihood profile of {name} did not converge: its interval reaches out to the "
+                           f"nearest sub-fits beyond the critical value (wider than the profile interval)")
+            else:
+                out.append(f"the likelihood profile of {name} did not converge; its interval is from the covariance")
         elif e.ci95_covariance is not None and e.ci95 is not None and None not in e.ci95:
             w_p, w_c = math.log(e.ci95[1] / e.ci95[0]), math.log(e.ci95_covariance[1] / e.ci95_covariance[0])
             if w_p > 0 and abs(w_p / w_c - 1.0) > DISAGREE:
