@@ -61,3 +61,25 @@ def test_the_plan_checks_shallow_frictionless_curve_has_a_converged_no_slip_prof
     w = ns.parameters["work_of_adhesion"].value
     assert 0.9 * w < lo < w < hi
     assert not any("did not converge" in m for m in r.warnings)
+
+
+def test_a_kink_narrowed_covariance_does_not_replace_the_profile(tmp_path):
+    """A replicate of the recovery study (pressure-curved, no-slip, 3 % noise, seed 20261220, replicate 8):
+    at the turning point's kink the covariance gives ln μh a standard error of 0.0007 (0.07 % at 3 % noise).
+    Two sub-fits a few of those out were called an open (flat) side, and a sub-fit 4e-4 units of D below the
+    optimum sent the report to the covariance: μh 1.9253-1.9276 N/m, missing the truth 2.0.  The profile
+    itself, followed beyond FLAT_MIN, is 1.857-2.009."""
+    import sys
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import recovery
+    import recovery_cases as rc
+    from adhfit import fit
+    ss = recovery.seed_sequence(20261220, "pressure-curved", "no-slip", "clean", 0.03, 8)
+    path = tmp_path / "curve.csv"
+    rc.make_curve("pressure-curved", "no-slip", 0.03, "clean", np.random.default_rng(ss), path)
+    r = fit(str(path), rc.CASES["pressure-curved"].scene, slip="auto")
+    e = r.parameters["mu_h"]
+    assert e.status == "determined" and e.ci95[0] < 2.0 < e.ci95[1]
+    assert math.log(e.ci95[1] / e.ci95[0]) > 0.05  # not the covariance's 0.1 %
+    prof = r.fits["no-slip"].profile["mu_h"]
+    assert prof["converged"] == [True, True] and prof["open"] == [False, False]

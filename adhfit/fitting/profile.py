@@ -30,10 +30,14 @@ __all__ = ["ProfileLimit", "profile_interval", "one_side", "critical_value"]
 #: stop when sqrt(D/critical) is within this of 1
 TOL = 0.03
 MAX_SUBFITS = 8
-#: a side is open when two successive probes, the last beyond FLAT_STEPS first-step standard errors,
-#: both stay below this fraction of the critical sqrt(D)
+#: a side is open when two successive probes, the last beyond FLAT_STEPS first-step standard errors and
+#: beyond FLAT_MIN (internal units: a factor e^0.5 in W_ad or μh), both stay below this fraction of the
+#: critical sqrt(D).  FLAT_MIN: at the turning point's kink the covariance's standard error can be 100x too
+#: small (0.0007 in ln μh under pressure control at 3 % noise), and "flat over five of them" then called a side
+#: open after two probes 0.3 % out, whose hull became a 0.1 %-wide interval that missed the truth
 FLAT_Q = 0.1
 FLAT_STEPS = 5.0
+FLAT_MIN = 0.5
 #: a limit bracketed between probes this close (relative to the inner probe's offset) is found
 BRACKET = 0.01
 #: largest first step of a profile, internal units (a factor e in W_ad or μh)
@@ -158,7 +162,7 @@ def _side(residual, best, name, direction, crit, s2, scale_covar, realign=None) 
                                 gain=gain, better=where)
         if value in (lo, hi) and q < 1.0:
             return ProfileLimit(value, k + 1, False, better, nfev, open=True, gain=gain, better=where)
-        if len(tried) >= 2 and all(p[1] < FLAT_Q for p in tried[-2:]) and abs(t) > FLAT_STEPS * se:
+        if len(tried) >= 2 and all(p[1] < FLAT_Q for p in tried[-2:]) and abs(t) > max(FLAT_STEPS * se, FLAT_MIN):
             # χ² barely moves over many standard errors: the data do not bound this side
             return ProfileLimit(value, k + 1, False, better, nfev, open=True, gain=gain, better=where)
         t = _next_step(tried, direction, se)
