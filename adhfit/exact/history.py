@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from ..errors import ConvergenceError, DomainError, InputError
 from ..histories import History
@@ -52,30 +52,38 @@ def _predict(v, vs, xs, x0):
     return out
 
 
-def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) -> list:
+def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False, start=None) -> list:
     """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
     predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
     (a fold the parameter cannot pass) returns the states solved up to there instead of raising.
-    Runs of rows are solved in one compiled call (``Stage.path``); a row that fails there is retried
-    here (its error, or the split)."""
-    out, xs, vs = [], [], []  # xs: the unknowns of the last (up to) PREDICT states of out
+    ``start`` = (value, state): a solved state of the stage the march continues from (not returned),
+    so that the first step too is split when it fails (a delamination march from the onset whose
+    first row lies far from it, on a coarse grid). Runs of rows are solved in one compiled call
+    (``Stage.path``); a row that fails there is retried here (its error, or the split)."""
+    out = []  # the states solved at values[:len(out)]
+    vs = [] if start is None else [float(start[0])]  # their parameters (after the start's)
+    xs = [] if start is None else [stage.x(start[1])]  # unknowns of the last (up to) PREDICT states
+    last = None if start is None else start[1]
+    k0 = len(vs)
     values = list(values)
-    while len(vs) < len(values):
-        got = stage.path(values[len(vs):], vs[-PREDICT:], xs, x0)
+    while len(out) < len(values):
+        got = stage.path(values[len(out):], vs[-PREDICT:], xs, x0)
         out.extend(got)
-        vs.extend(values[len(vs):len(vs) + len(got)])
+        vs.extend(values[len(vs) - k0:len(vs) - k0 + len(got)])
         xs = (xs + [stage.x(st) for st in got[-PREDICT:]])[-PREDICT:]
-        if len(vs) == len(values):
+        last = out[-1] if out else last
+        if len(out) == len(values):
             break
-        v = values[len(vs)]
+        v = values[len(out)]
         try:
             st = stage.solve(v, _predict(v, vs, xs, x0))
         except ConvergenceError:
-            if depth >= 12 or not vs:
+            if depth >= 12 or last is None:
                 if stop_ok:
                     return out
                 raise
-            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok)
+            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok,
+                        start=(vs[-1], last))
             if len(mid) < 2:
                 out.extend(mid)
                 if stop_ok:
@@ -83,6 +91,7 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) ->
                 raise
             st = mid[-1]
         out.append(st)
+        last = st
         xs = (xs + [stage.x(st)])[-PREDICT:]
         vs.append(v)
     return out
@@ -152,7 +161,19 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         if len(states) > 1:
             _case_one_in_control(stage, c, states[-2], states[-1])
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
+    states[-1] = _tight(stage, a_vals[-1], states[-1])
     return [free] + states, states[-1]
+
+
+def _tight(stage, value, st):
+    """``st`` solved again to EXTREMUM_TOL: rows are solved to 1e-10 and agree with re-solves to ~1e-9,
+    from predictors that depend on the row grid; the states the summary reports (the end of loading,
+    the onset) and every later stage starts from must not (f_max moved by 3e-9 between 50 and 1001
+    rows). ``st`` itself where that solve fails."""
+    try:
+        return stage.solve(value, stage.x(st), tol=EXTREMUM_TOL)
+    except ConvergenceError:
+        return st
 
 
 def _case_one_end(stage, c, good, a_bad):
@@ -349,6 +370,7 @@ def _onset(cfg, c, m):
     except ConvergenceError:
         stage, par = (pin, lambda s: s.alpha) if ctl is None else (ctl, _control_value(c))
         on = _onset_between(stage, par, on_stage, pin, c, prev, st)
+    on = _tight(on_stage, c.w, on)
     return on, pin, ctl, turn
 
 
@@ -381,16 +403,22 @@ def _pinning(cfg, c, m):
     was continued in the control past a fold in alpha (``_bracket_in_control``), the first half of the
     rows is marched in alpha up to where that march handed over, the second half in the control."""
     on, pin, ctl, turn = _onset(cfg, c, m)
+    c.pin_parts = []  # (stage, its states in path order, m or the handover and the onset included)
     if c.n_pin <= 2:
         return [on], on
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
-        return _rows(pin, u * on.alpha, pin.x(m), c) + [on], on
+        rows = _rows(pin, u * on.alpha, pin.x(m), c)
+        c.pin_parts = [(pin, [m] + rows + [on])]
+        return rows + [on], on
     val = _control_value(c)
     if turn is m:
-        return _rows(ctl, val(m) + u * (val(on) - val(m)), ctl.x(m)[:1] + [0.0], c) + [on], on
+        rows = _rows(ctl, val(m) + u * (val(on) - val(m)), ctl.x(m)[:1] + [0.0], c)
+        c.pin_parts = [(ctl, [m] + rows + [on])]
+        return rows + [on], on
     first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
     second = _rows(ctl, val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn)), ctl.x(turn), c)
+    c.pin_parts = [(pin, [m] + first + [turn]), (ctl, [turn] + second + [on])]
     return first + second + [on], on
 
 
@@ -578,31 +606,35 @@ def _delamination(cfg, c, m, on):
     g = (1.0 - _cluster(c.n_del)[1:]) ** 1.5
     g[-1] = min(g[-2] * 0.5, 1e-3)
     rho = on.rho_a * g
-    states = march(stage, rho, stage.x(on), stop_ok=True)
+    # continued from the onset itself, so that a first step that fails is split (on 10 rows the first
+    # delamination row lies 20 % of rho_a from the onset: the step failed, or passed the branch end)
+    states = march(stage, rho, stage.x(on), stop_ok=True, start=(on.rho_a, on))
     no_slip = c.slip == "no-slip"
     if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
         states = states[:next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))]
+    ends = lambda sts: no_slip and (sts[-1] if sts else on).alpha < 0.2  # noqa: E731
+    if len(states) < len(rho) and not ends(states):
+        states = _finish(stage, states, rho, c, no_slip, on)
+    if len(states) < len(rho) and ends(states):
+        end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
+        last = states[-1] if states else on
+        x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
+        states.append(end.solve(0.0, x, tol=EXTREMUM_TOL))
+        return states, stage, states[-1].a
     if not states:
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
-    if len(states) < len(rho) and not (no_slip and states[-1].alpha < 0.2):
-        states = _finish(stage, states, rho, c, no_slip)
-    if len(states) < len(rho) and no_slip and states[-1].alpha < 0.2:
-        end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
-        last = states[-1]
-        x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
-        states.append(end.solve(0.0, x))
-        return states, stage, states[-1].a
     return states, stage, None
 
 
-def _finish(stage, states, rho, c, no_slip):
-    """Retry a delamination march that stopped early on a four times finer grid from its last state;
-    raise a ConvergenceError naming where it stopped if that fails too."""
+def _finish(stage, states, rho, c, no_slip, on):
+    """Retry a delamination march that stopped early on a four times finer grid from its last state
+    (the onset when none solved); raise a ConvergenceError naming where it stopped if that fails too."""
     k = len(states)
-    fine = [states[-1].rho_a] + list(rho[k:])
+    base = states[-1] if states else on
+    fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
-    more = march(stage, rest, stage.x(states[-1]), stop_ok=True)
+    more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base))
     if no_slip:
         more = more[:next((i for i, s in enumerate(more) if s.alpha < 0.0), len(more))]
     kept = more[3::4]  # the history's own rows (every fourth value of the finer grid)
@@ -610,6 +642,9 @@ def _finish(stage, states, rho, c, no_slip):
         return states + kept
     if no_slip and more and more[-1].alpha < 0.2:  # the branch end, reached on the finer grid
         return states + kept + ([] if kept and kept[-1] is more[-1] else [more[-1]])
+    if not states and not more:
+        raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
+                               {"w": c.w, "lambda0": c.lambda0})
     last = (more or states)[-1]
     _check_membrane(c, [("delamination", s) for s in states + more])  # e.g. the edge stuck at the equator
     _delamination_end(stage, c, last, rest[len(more)])
@@ -687,68 +722,125 @@ def _vertex(x, y, c, h):
     return None if math.isnan(v) else float(v)
 
 
-def _extremum(stage, states, key, sign):
-    """Refine the minimum of sign*key over the delamination path: the vertex of the polynomial through
-    the (up to) five rows around the least row, then of the quartic through five states solved to
-    EXTREMUM_TOL on a stencil of a tenth of the row spacing around it (the objective is flat there: its
-    derivative, not its value, locates the minimum)."""
+def _extremum(stage, states, key, sign, scale=None, limits=None):
+    """The minimum of sign*key along ``stage`` near the least of ``states`` (solved states of the
+    stage, in path order), located on the continuous branch whatever the row grid: Brent's method on
+    the solved states between the least row's neighbours (one-sided at an end of ``states``: the
+    minimum may lie between an end and its neighbour, e.g. just before a no-slip branch end, or just
+    after the onset), then the vertex of the quartic through five states solved to EXTREMUM_TOL on a
+    stencil of ``H_FINAL`` * ``scale`` (the path's extent in its parameter; the onset's rho_a by
+    default) around it, inside ``limits`` (the parameter's range where the branch is smooth) (the
+    objective is flat there: its derivative, not its value, locates the minimum). An end of ``states``
+    is returned when the minimum is there."""
+    par = lambda st: float(getattr(st, stage.param))  # noqa: E731
     vals = [sign * key(s) for s in states]
     i = int(np.argmin(vals))
-    if i == 0 or i == len(states) - 1:
+    n = len(states)
+    if n < 2:
         return states[i]
-    lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
+    lo, hi = sorted((par(states[max(i - 1, 0)]), par(states[min(i + 1, n - 1)])))
     if not hi > lo:
         return states[i]
-    j0, j1 = max(0, i - 2), min(len(states), i + 3)
-    h = 0.05 * (hi - lo)
-    c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
-    c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
-    vs, xs = [st.rho_a for st in states[j0:j1]][::-1], [stage.x(st) for st in states[j0:j1]][::-1]
-    # the final stencil's width: small enough that the quartic's O(h^4) bias is ~1e-12, large enough
-    # that states solved to EXTREMUM_TOL locate the vertex to ~1e-10 (both measured against 1001 rows)
-    h_min = H_FINAL * states[0].rho_a
-    if h < h_min and lo + 2 * h_min < hi - 2 * h_min:
-        h = h_min
-    pts, found = [], None
-    for _ in range(6):
-        grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
-        pts = stage.path(grid, vs, xs, xs[-1], tol=EXTREMUM_TOL)
-        if len(pts) < len(grid):
-            break
-        v = _vertex(grid, [sign * key(st) for st in pts], c, h)
+    known = {par(st): st for st in states[max(0, i - 3):i + 4]}
+
+    def solve(v):
+        near = sorted(known, key=lambda q: abs(q - v))[:4]
+        xs = [stage.x(known[q]) for q in near]
+        got = stage.path([v], near, xs, xs[0], tol=EXTREMUM_TOL)
+        st = got[0] if got else stage.solve(v, xs[0], tol=EXTREMUM_TOL)
+        known[v] = st
+        return st
+
+    worst = max(vals) + 1.0 + abs(max(vals))
+
+    def objective(v):
+        try:
+            return sign * key(solve(v))
+        except ConvergenceError:
+            return worst
+    width = hi - lo
+    res = minimize_scalar(objective, bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-7 * width, "maxiter": 200})
+    x = float(res.x)
+    if not res.fun < vals[i]:
+        return states[i]  # the least row is the minimum: an end of the path (a kink), or flat to rounding
+    scale = abs(par(states[0])) if scale is None else scale
+    # the stencil stays inside ``limits`` (a no-slip branch end at alpha = 0 is not smooth through: a
+    # stencil reaching 4e-4 rho_a past it put the vertex 2e-8 off), down to a hundredth of its width
+    h = H_FINAL * scale
+    if stage.param == "rho_a":
+        # toward detachment (rho_a -> 0) the observables vary on the scale of rho_a itself: a stencil of
+        # +-0.26 rho_a put the quartic's vertex 2.5e-7 off; at +-0.06 rho_a its O(h^4) error is ~1e-10
+        h = min(h, 0.03 * x)
+    if limits is not None:
+        h = min(h, max(0.4 * min(x - limits[0], limits[1] - x), 0.01 * h))
+    if not h > 0.0:
+        return known.get(x, states[i])
+    best = known[x] if x in known else states[i]
+    for _ in range(4):
+        grid = list(x + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
+        try:
+            pts = [solve(v) for v in grid]
+        except ConvergenceError:
+            h *= 0.25  # a stencil reaching off the branch (past its end): a narrower one
+            continue
+        v = _vertex(grid, [sign * key(st) for st in pts], x, h)
         if v is None:
             break
-        if abs(v - c) <= 1.5 * h:
-            found = (v, grid, pts)
-            if h <= h_min:
-                break
-            # the stencil's vertex is off by O(h^4): shrink the stencil around it, so the summary's other
-            # quantities (linear in the locator there) do not depend on the row spacing
-            c, h = v, max(0.1 * h, h_min)
-            c = min(max(c, lo + 2 * h), hi - 2 * h)
-            vs, xs = grid, [stage.x(st) for st in pts]
-            continue
-        c = min(max(v, lo + 2 * h), hi - 2 * h)
-    if found is not None:
-        v, grid, pts = found
-        fin = stage.path([v], grid, [stage.x(st) for st in pts], stage.x(pts[2]), tol=EXTREMUM_TOL)
-        return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
-    return min(pts + [states[i]], key=lambda st: sign * key(st))
+        if abs(v - x) <= 1.5 * h:
+            x = v
+            break
+        x = min(max(v, lo), hi)
+    if not lo - 1e-12 * width <= x <= hi + 1e-12 * width:
+        return best
+    try:
+        fin = solve(x)
+    except ConvergenceError:
+        return best
+    # the vertex, unless clearly worse than the best state seen (a vertex of another feature): the values
+    # themselves carry the states' rounding (~1e-12 with p an unknown), Brent's minimum is only as good
+    # as the values (a locator ~1e-6 off on a flat minimum), the vertex's derivative is not
+    return fin if sign * key(fin) <= sign * key(best) + 1e-10 * (1.0 + abs(sign * key(best))) else best
 
 
-def _first_turn(stage, m, pin, dl, key, sign):
+def _first_turn(stage, m, pin, dl, key, sign, parts=(), found=None, limits=None):
     """The turning point: where the control variable (sign * key falling) first stops falling on the
     way out (docs/contracts.md), not its least value over the branch. The end of loading ``m`` when
-    it rises at once; a pinning row when it turns during pinning; else refined on delamination
-    (``_extremum`` over the rows up to just past the first turn). ``pin`` ends with the onset."""
+    it rises at once; on pinning when it turns there (``parts``: the pinning stages and their states,
+    ``_pinning``), else on delamination, each refined on its stage (``_extremum`` over the states up
+    to just past the first turn: between rows, or between the end of loading or the onset and the
+    next row). ``pin`` ends with the onset. A state refined on pinning is recorded in ``found``
+    (its id: its part)."""
     seq = [m] + pin + dl
     vals = [sign * key(s) for s in seq]
     j = next((i for i in range(len(seq) - 1) if vals[i + 1] > vals[i] + TURN_TOL * (1.0 + abs(vals[i]))),
              len(seq) - 1)
     n_on = len(pin)  # index of the onset in seq
     if j < n_on:
-        return seq[j]
-    return _extremum(stage, seq[n_on:j + 2], key, sign)
+        return _on_pinning(parts, seq[j], key, sign, first=True, found=found)
+    return _extremum(stage, seq[n_on:j + 2], key, sign, limits=limits)
+
+
+def _on_pinning(parts, row, key, sign, first=False, found=None):
+    """The minimum of sign*key on the pinning part through the row ``row``, refined between its states
+    (``_extremum``); with ``first``, over its states up to just past ``row`` only (the first turn of
+    the control, which is monotone along a part continued in the control: only a part in alpha is
+    searched then). ``row`` when it lies on no such part. ``found`` (a dict) records the part of a new
+    state under its id."""
+    for part in parts:
+        stage, sts = part
+        if first and stage.param != "alpha":
+            continue
+        k = next((q for q, st in enumerate(sts) if st is row), None)
+        if k is None:
+            continue
+        span = abs(float(getattr(sts[-1], stage.param)) - float(getattr(sts[0], stage.param)))
+        lim = (0.0, math.inf) if stage.param == "alpha" else None
+        st = _extremum(stage, sts[:k + 2] if first else sts, key, sign, scale=span, limits=lim)
+        if found is not None:
+            found[id(st)] = part
+        return st
+    return row
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
@@ -793,16 +885,38 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     _check_membrane(c, [("delamination", s) for s in dl])
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
-    turn = _first_turn(stage, m, pin, dl, key, sign)
-    fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
-    fmin = min([fmin] + pin, key=lambda s: s.f)  # the most negative force of the history (A2), pinning too
-    extra = [s for s in (turn, fmin) if all(s is not t for t in mc + pin + dl)]
-    dl = sorted(dl + extra, key=lambda s: -s.rho_a)
+    parts, found = getattr(c, "pin_parts", []), {}
+    # delamination is smooth from rho_a = 0 (or the no-slip branch end) on, through the onset
+    limits = (dl[-1].rho_a if ends_at is not None else 0.0, math.inf)
+    turn = _first_turn(stage, m, pin, dl, key, sign, parts, found, limits)
+    fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0, limits=limits)
+    low = min(pin, key=lambda s: s.f)
+    if low.f <= fmin.f:  # the most negative force of the history (A2) on pinning (or at the onset's kink)
+        fmin = min([fmin, _on_pinning(parts, low, lambda s: s.f, 1.0, found=found)], key=lambda s: s.f)
+    rows = mc + pin + dl
+    extra = [s for s in (turn, fmin) if all(s is not t for t in rows)]
+    if len(extra) == 2 and extra[0] is extra[1]:
+        extra = extra[:1]
+    for s in extra:
+        if id(s) in found:
+            pin = _insert_pinning(pin, *found[id(s)], s)
+        else:
+            dl.append(s)
+    dl = sorted(dl, key=lambda s: -s.rho_a)
     out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
     if ends_at is not None:
         # the no-slip quasi-static branch ends at a finite contact radius (detachment from there is dynamic)
         out.inputs["delamination_ends_at_a"] = ends_at
     return out
+
+
+def _insert_pinning(pin, stage, sts, s):
+    """``pin`` with the refined state ``s`` of the pinning part (stage, states) inserted in path order."""
+    par = lambda st: float(getattr(st, stage.param))  # noqa: E731
+    sgn = 1.0 if par(sts[-1]) >= par(sts[0]) else -1.0
+    mine = [q for q, st in enumerate(pin) if any(st is t for t in sts)]
+    pos = next((q for q in mine if sgn * par(pin[q]) > sgn * par(s)), mine[-1] + 1 if mine else len(pin) - 1)
+    return pin[:pos] + [s] + pin[pos:]
 
 
 def _check_compressive(c, mc, m):
@@ -811,7 +925,11 @@ def _check_compressive(c, mc, m):
     A tensile one means the free membrane is more concave at its apex than the substrate (its apex
     curvature p / (1 - lambda_c^-6) below -1/rs, a stricter bound than the large-stretch p > -1/rs):
     contact would not start at the apex, outside the model."""
-    bad = [s for s in mc[1:] if not s.f > 0.0]
+    # a state solved to 1e-10 carries a force error of ~1e-10 of the forces about it: at a contact radius
+    # of ~1e-6 (the first rows of a dense grid) a compressive force of ~1e-12 came out -2e-10, and 1001
+    # rows raised what 200 did not; a tensile branch is tensile well above that (|f| grows like a^2)
+    floor = -1e-8 * abs(m.f)
+    bad = [s for s in mc[1:] if not s.f > floor or s is m and not s.f > 0.0]
     if not bad:
         return
     crv = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
