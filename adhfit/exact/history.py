@@ -19,6 +19,9 @@ __all__ = ["exact_history", "COLUMNS"]
 END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
 # shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
+STENCIL_TOL = 1e-13  # the extremum's stencil states (``_extremum``): a row's observables carry ~10x its
+# tolerance (the shotless last Newton step), and the stencil's vertex ~1e3x the observables' error:
+# at 1e-12 a flat f_min's contact radius moved by 7e-9 with the row grid
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 TURN_TOL = 1e-10  # a row counts as past the first turning point when the control has come back up by this
 H_FINAL = 2e-3  # width of the extremum's last stencil, relative to the onset's rho_a (``_extremum``)
@@ -743,11 +746,24 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
         return states[i]
     known = {par(st): st for st in states[max(0, i - 3):i + 4]}
 
-    def solve(v):
-        near = sorted(known, key=lambda q: abs(q - v))[:4]
+    def solve(v, tol=EXTREMUM_TOL):
+        # the predictor's nodes: the nearest solved states, spread at least as far apart as the nearest is
+        # from v (Brent's last states lie within 1e-9 of each other: a cubic through them, extrapolated
+        # to a stencil point 1e-3 away, led Newton onto another branch)
+        near = []
+        for q in sorted(known, key=lambda q: abs(q - v)):
+            if len(near) == 4:
+                break
+            if not near or min(abs(q - r) for r in near) >= 0.5 * abs(near[0] - v):
+                near.append(q)
         xs = [stage.x(known[q]) for q in near]
-        got = stage.path([v], near, xs, xs[0], tol=EXTREMUM_TOL)
-        st = got[0] if got else stage.solve(v, xs[0], tol=EXTREMUM_TOL)
+        got = stage.path([v], near, xs, xs[0], tol=tol)
+        try:
+            st = got[0] if got else stage.solve(v, xs[0], tol=tol)
+        except ConvergenceError:
+            if tol >= EXTREMUM_TOL:
+                raise
+            st = stage.solve(v, xs[0], tol=EXTREMUM_TOL)
         known[v] = st
         return st
 
@@ -762,8 +778,9 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
     res = minimize_scalar(objective, bounds=(lo, hi), method="bounded",
                           options={"xatol": 1e-7 * width, "maxiter": 200})
     x = float(res.x)
-    if not res.fun < vals[i]:
-        return states[i]  # the least row is the minimum: an end of the path (a kink), or flat to rounding
+    if not res.fun < vals[i] and i in (0, n - 1):
+        return states[i]  # the minimum is the end of the path (a kink, a branch end)
+    # (an interior least row may lie closer to the minimum than its values resolve: polished all the same)
     scale = abs(par(states[0])) if scale is None else scale
     # the stencil stays inside ``limits`` (a no-slip branch end at alpha = 0 is not smooth through: a
     # stencil reaching 4e-4 rho_a past it put the vertex 2e-8 off), down to a hundredth of its width
@@ -780,7 +797,7 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
     for _ in range(4):
         grid = list(x + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
         try:
-            pts = [solve(v) for v in grid]
+            pts = [solve(v, STENCIL_TOL) for v in grid]
         except ConvergenceError:
             h *= 0.25  # a stencil reaching off the branch (past its end): a narrower one
             continue
@@ -794,7 +811,7 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
     if not lo - 1e-12 * width <= x <= hi + 1e-12 * width:
         return best
     try:
-        fin = solve(x)
+        fin = solve(x, STENCIL_TOL)
     except ConvergenceError:
         return best
     # the vertex, unless clearly worse than the best state seen (a vertex of another feature): the values
