@@ -416,13 +416,50 @@ def _pinning(cfg, c, m):
         return rows + [on], on
     val = _control_value(c)
     if turn is m:
-        rows = _rows(ctl, val(m) + u * (val(on) - val(m)), ctl.x(m)[:1] + [0.0], c)
+        values = val(m) + u * (val(on) - val(m))
+        rows = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(m)[:1] + [0.0], c)
         c.pin_parts = [(ctl, [m] + rows + [on])]
         return rows + [on], on
     first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
-    second = _rows(ctl, val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn)), ctl.x(turn), c)
+    values = val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn))
+    second = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(turn), c)
     c.pin_parts = [(pin, [m] + first + [turn]), (ctl, [turn] + second + [on])]
     return first + second + [on], on
+
+
+def _rows_on_path(stage, values, c):
+    """Pinning rows in the control, each solved from the unknowns interpolated on the continuation that
+    found the onset (``_bracket_in_control``, adaptive steps); None when there is none or a row fails
+    (the caller then marches them). Marched from row to row (a Lagrange predictor through rows evenly
+    spaced in d) the rows could not follow alpha rising from 0.4 to 2.6 while d moved by 0.05 (near a
+    fold in d): Newton ran off to alpha + 2 pi k (alpha = 2.4e6) and the march failed later, a
+    ConvergenceError in the stress run (p = -0.921, rs = 0.076, lambda0 = 1.557)."""
+    out = []
+    for v in values:
+        g = _on_path(c, v, None)
+        if g is None:
+            return None
+        try:
+            st = stage.solve(v, g)
+        except ConvergenceError:
+            return None
+        if abs(st.alpha - g[-1]) > 0.1 or _outside(c, st) is not None:
+            return None  # not the continuation's state: the march decides (and names any end)
+        out.append(st)
+    return out
+
+
+def _on_path(c, v, x0):
+    """The unknowns at control value ``v`` interpolated on the continuation in the control that found the
+    onset (``_bracket_in_control``), else ``x0``."""
+    path = getattr(c, "ctl_path", None)
+    if not path or len(path[0]) < 2:
+        return x0
+    vs, xs = np.asarray(path[0], dtype=float), np.asarray(path[1], dtype=float)
+    order = np.argsort(vs)
+    if not vs[order[0]] <= v <= vs[order[-1]]:
+        return x0
+    return [float(np.interp(v, vs[order], xs[order, j])) for j in range(xs.shape[1])]
 
 
 def _rows(stage, values, x0, c):
@@ -527,6 +564,7 @@ def _bracket_in_control(c, m, prev):
                 break
             continue
         if st.G >= c.w:
+            c.ctl_path = (vs + [v], xs + [ctl.x(st)])  # start guesses for pinning's rows (``_pinning``)
             return good, good.alpha, st, st.alpha, (ctl, prev)
         good = st
         vs.append(v)
