@@ -19,6 +19,7 @@ __all__ = ["exact_history", "COLUMNS"]
 END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
 # shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
+SPLIT_FROM_STATE = 3  # march's first splits of a failed step continue from the last solved state
 STENCIL_TOL = 1e-13  # the extremum's stencil states (``_extremum``): a row's observables carry ~10x its
 # tolerance (the shotless last Newton step), and the stencil's vertex ~1e3x the observables' error:
 # at 1e-12 a flat f_min's contact radius moved by 7e-9 with the row grid
@@ -85,8 +86,11 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False, st
                 if stop_ok:
                     return out
                 raise
+            # the halves continue from the last solved state for the first few splits only: each split
+            # of a step that fails for good (a branch end) costs a failed Newton solve, and 12 of them at
+            # every stop doubled the time of a history (as before, deeper halves start from its unknowns)
             mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok,
-                        start=(vs[-1], last))
+                        start=(vs[-1], last) if depth < SPLIT_FROM_STATE else None)
             if len(mid) < 2:
                 out.extend(mid)
                 if stop_ok:
@@ -813,39 +817,66 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
         except ConvergenceError:
             return worst
     width = hi - lo
-    res = minimize_scalar(objective, bounds=(lo, hi), method="bounded",
-                          options={"xatol": 1e-7 * width, "maxiter": 200})
-    x = float(res.x)
-    if not res.fun < vals[i] and i in (0, n - 1):
-        return states[i]  # the minimum is the end of the path (a kink, a branch end)
-    # (an interior least row may lie closer to the minimum than its values resolve: polished all the same)
     scale = abs(par(states[0])) if scale is None else scale
-    # the stencil stays inside ``limits`` (a no-slip branch end at alpha = 0 is not smooth through: a
-    # stencil reaching 4e-4 rho_a past it put the vertex 2e-8 off), down to a hundredth of its width
-    h = H_FINAL * scale
-    if stage.param == "rho_a":
-        # toward detachment (rho_a -> 0) the observables vary on the scale of rho_a itself: a stencil of
-        # +-0.26 rho_a put the quartic's vertex 2.5e-7 off; at +-0.06 rho_a its O(h^4) error is ~1e-10
-        h = min(h, 0.03 * x)
-    if limits is not None:
-        h = min(h, max(0.4 * min(x - limits[0], limits[1] - x), 0.01 * h))
-    if not h > 0.0:
-        return known.get(x, states[i])
-    best = known[x] if x in known else states[i]
-    for _ in range(4):
-        grid = list(x + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
-        try:
-            pts = [solve(v, STENCIL_TOL) for v in grid]
-        except ConvergenceError:
-            h *= 0.25  # a stencil reaching off the branch (past its end): a narrower one
-            continue
-        v = _vertex(grid, [sign * key(st) for st in pts], x, h)
-        if v is None:
-            break
-        if abs(v - x) <= 1.5 * h:
-            x = v
-            break
-        x = min(max(v, lo), hi)
+
+    def stencil(x):
+        """The final stencil's spacing about x: ``H_FINAL`` * scale, inside ``limits`` (a no-slip branch end
+        at alpha = 0 is not smooth through: a stencil reaching 4e-4 rho_a past it put the vertex 2e-8
+        off), down to a hundredth of that; toward detachment (rho_a -> 0) the observables vary on the
+        scale of rho_a itself: a stencil of +-0.26 rho_a put the quartic's vertex 2.5e-7 off; at
+        +-0.06 rho_a its O(h^4) error is ~1e-10."""
+        h = H_FINAL * scale
+        if stage.param == "rho_a":
+            h = min(h, 0.03 * x)
+        if limits is not None:
+            h = min(h, max(0.4 * min(x - limits[0], limits[1] - x), 0.01 * h))
+        return h
+
+    def polish(x):
+        """The vertex of the quartic through the stencil about x, re-centred (up to 5 times) until it
+        lies within 0.05 h of the centre: (x, converged: within 1.5 h at the last)."""
+        h = stencil(x)
+        near = False
+        if not h > 0.0:
+            return x, False
+        for _ in range(5):
+            grid = list(x + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
+            try:
+                pts = [solve(v, STENCIL_TOL) for v in grid]
+            except ConvergenceError:
+                h *= 0.25  # a stencil reaching off the branch (past its end): a narrower one
+                continue
+            v = _vertex(grid, [sign * key(st) for st in pts], x, h)
+            if v is None:
+                return x, False
+            if abs(v - x) <= 0.05 * h:
+                return v, True
+            # re-centred on the vertex: off-centre the quartic's vertex carries its O(h^4) error (a
+            # vertex 0.075 h off the centre was 5e-8 off the centred one)
+            near = abs(v - x) <= 1.5 * h
+            x = min(max(v, lo), hi)
+        return x, near
+
+    x, done = None, False
+    if 0 < i < n - 1:
+        # on a grid dense next to the stencil, from the vertex of the rows' own polynomial (no solve)
+        j0, j1 = max(0, i - 2), min(n, i + 3)
+        c0 = _vertex([par(st) for st in states[j0:j1]], vals[j0:j1], par(states[i]), width)
+        if c0 is not None and lo < c0 < hi and width <= 8.0 * stencil(c0):
+            x, done = polish(c0)
+    best = states[i]
+    if not done:
+        # else (or where that did not converge) Brent's method on the values first: to a fifth of the
+        # stencil, which then locates the minimum by its derivative
+        res = minimize_scalar(objective, bounds=(lo, hi), method="bounded",
+                              options={"xatol": max(0.2 * stencil(par(states[i])), 1e-9 * width),
+                                       "maxiter": 200})
+        x = float(res.x)
+        if not res.fun < vals[i] and i in (0, n - 1):
+            return states[i]  # the minimum is the end of the path (a kink, a branch end)
+        # (an interior least row may lie closer to the minimum than its values resolve: polished all the same)
+        best = known[x] if x in known and res.fun < vals[i] else states[i]
+        x, _ = polish(x)
     if not lo - 1e-12 * width <= x <= hi + 1e-12 * width:
         return best
     try:
