@@ -886,7 +886,19 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
     # the vertex, unless clearly worse than the best state seen (a vertex of another feature): the values
     # themselves carry the states' rounding (~1e-12 with p an unknown), Brent's minimum is only as good
     # as the values (a locator ~1e-6 off on a flat minimum), the vertex's derivative is not
-    return fin if sign * key(fin) <= sign * key(best) + 1e-10 * (1.0 + abs(sign * key(best))) else best
+    # (held against every state solved in the bracket, the stencils' too)
+    best = min([best] + [st for v, st in known.items() if lo <= v <= hi], key=lambda st: sign * key(st))
+    if sign * key(fin) <= sign * key(best) + 1e-10 * (1.0 + abs(sign * key(best))):
+        return fin
+    # the vertex is not the minimum (the observable is not smooth on the stencil's scale: near detachment,
+    # at a = 5e-4, successive vertices wandered by 6e-7): Brent's method on the values about the best
+    # state, to 1e-7 of the stencil (its locator as good as the values; the same on every row grid to 1e-9)
+    xb = par(best)
+    h = stencil(xb)
+    res = minimize_scalar(objective, bounds=(max(lo, xb - 2.0 * h), min(hi, xb + 2.0 * h)), method="bounded",
+                          options={"xatol": 1e-7 * h, "maxiter": 200})
+    got = known.get(float(res.x))
+    return got if got is not None and sign * key(got) < sign * key(best) else best
 
 
 def _first_turn(stage, m, pin, dl, key, sign, parts=(), found=None, limits=None):
