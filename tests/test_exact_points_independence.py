@@ -181,3 +181,32 @@ def test_pinning_rows_in_the_control_follow_a_steep_branch():
                                                                                            abs=1e-4)
     assert path[i - 1].d + t * (path[i].d - path[i - 1].d) == pytest.approx(h.columns["d"][i_on], abs=1e-4)
     assert G[i_on] == pytest.approx(c.w, abs=1e-9)
+
+
+#: no-slip pinning continued in d stalls at alpha = 1.370 with G = 0.318 < w = 3.80: the other
+#: ConvergenceError of the stress run. It is the branch's largest d (a fold in the control, alpha and G
+#: peaking next to it, both falling past it): no pinned state at a larger gap and no onset of delamination.
+CONTROL_FOLD = dict(control="displacement", slip="no-slip", p=-0.28816314004564436, w=3.7953424657445645,
+                    rs=0.028558810004232025, a_max=0.02685813924696101, lambda0=1.1015354901724248)
+
+
+def test_pinning_that_folds_in_the_control_before_the_onset_is_a_domain_error():
+    from adhfit.errors import DomainError
+    from tests.test_domain_exact_ends import arclength_pinning
+    msgs = []
+    for n in (10, 50, 200):
+        with pytest.raises(DomainError) as err:
+            H.exact_history(**CONTROL_FOLD, points=n)
+        msgs.append(str(err.value))
+    assert all("retracts the control at most to d = " in m for m in msgs)
+    d_maxes = [float(m.split(" at most to d = ")[1].split()[0]) for m in msgs]
+    assert max(d_maxes) - min(d_maxes) < 1e-10
+    d_max = d_maxes[-1]
+    # the independent branch (pseudo-arclength in (l1p, alpha), no parameter of its own to fold in):
+    # d rises to the engine's d_max and falls again, G stays below w throughout
+    c, path = arclength_pinning(CONTROL_FOLD, ds=0.01, steps=500)
+    d = np.array([s.d for s in path])
+    k = int(np.argmax(d))
+    assert 0 < k < len(path) - 1 and d[-1] < d[k] - 1e-4
+    assert d[k] == pytest.approx(d_max, abs=1e-5)
+    assert max(s.G for s in path) < c.w

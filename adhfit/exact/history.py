@@ -592,9 +592,75 @@ def _bracket_in_control(c, m, prev):
                           "lower w, or change the loading end",
                           {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
                            "a_max": c.a_max, "rs": c.rs})
+    _control_fold(cfg, c, ctl, last, prev)  # raises where the stall is the branch's extremum of the control
     raise ConvergenceError("exact pinning: G does not reach w before the pinning branch (continued in "
                            "the control variable) stalls",
                            {"w": c.w, "alpha": last.alpha, "G": last.G, "lc": last.lc, "lambda0": c.lambda0})
+
+
+def _control_fold(cfg, c, ctl, last, start):
+    """The continuation of pinning in the control stalled at ``last`` with G < w: when that is the
+    branch's largest retraction of the control (a fold in d, or in p under pressure control), shown on
+    the branch parameterized by the edge's other unknown (lambda1+ with no slip, lc frictionless) -- solved
+    states either side of it retracting the control less, the extremum located between them -- with G
+    < w there and falling past it, raise it as a DomainError: no pinned state retracts the control
+    further and the edge does not delaminate (the membrane would come off dynamically, outside the
+    quasi-static model). ``start``: where the continuation started (the fold's other side is past it).
+    Returns when not shown."""
+    name = ctl.unknowns[0]
+    if c.control == "displacement":
+        fx = Stage(cfg, ctl.edge, {**ctl.fixed, name: getattr(last, name)}, ("alpha",), ("clamp",), {}, name)
+    else:
+        fixed = {k: v for k, v in ctl.fixed.items() if k != "p"}
+        fx = Stage(cfg, ctl.edge, {**fixed, name: getattr(last, name)}, ("alpha", "p"), ("clamp", "d"),
+                   {"d": c.d}, name)
+    val = _control_value(c)
+    sgn = 1.0 if c.control == "displacement" else -1.0  # retracting: d rising, p falling
+    x0 = float(getattr(last, name))
+    try:
+        mid = fx.solve(x0, fx.x(last))
+    except ConvergenceError:
+        return
+    h = 1e-3 * (1.0 + abs(x0))
+    sts = {x0: mid}
+    for _ in range(12):  # widen until both sides retract the control less than the middle
+        for side in (-1.0, 1.0):
+            xs = sorted(sts)
+            near = xs[0] if side < 0 else xs[-1]
+            v = near + side * h
+            try:
+                sts[v] = fx.solve(v, fx.x(sts[near]))
+            except ConvergenceError:
+                return
+        xs = sorted(sts)
+        vals = [sgn * val(sts[x]) for x in xs]
+        k = int(np.argmax(vals))
+        if 0 < k < len(xs) - 1:
+            break
+        h *= 2.0
+    else:
+        return
+    states = [sts[x] for x in xs]
+    fold = _extremum(fx, states, val, -sgn, scale=xs[-1] - xs[0])
+    if not fold.G < c.w or not all(st.G < c.w for st in states) or abs(fold.theta_end) >= 0.5 * math.pi:
+        return
+    if _outside(c, fold) is not None:
+        return
+    # past the fold (the side the continuation did not reach) G falls: it does not reach w there either
+    k = int(np.argmax([sgn * val(st) for st in states]))
+    ahead = states[k + 1:] if float(getattr(start, name)) < xs[k] else states[:k][::-1]
+    if not ahead or not ahead[-1].G < fold.G:
+        return
+    vname = "d" if c.control == "displacement" else "p"
+    raise DomainError(f"the exact pinning branch ({c.slip}) retracts the control at most to {vname} = "
+                      f"{val(fold):.10g} (alpha = {fold.alpha:.8g}, G = {fold.G:.6g}), before G reaches w = "
+                      f"{c.w:g}: no pinned state beyond it, and the contact edge does not delaminate there "
+                      "(the membrane would come off dynamically, outside the quasi-static model)",
+                      f"the control's extremum along the branch parameterized by {name}, between solved "
+                      "states either side retracting it less, G falling past it",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": val(fold)})
 
 
 _END_WORDS = {
