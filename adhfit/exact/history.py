@@ -721,21 +721,58 @@ def _delamination(cfg, c, m, on):
     # delamination row lies 20 % of rho_a from the onset: the step failed, or passed the branch end)
     states = march(stage, rho, stage.x(on), stop_ok=True, start=(on.rho_a, on))
     no_slip = c.slip == "no-slip"
+    past = None
     if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
-        states = states[:next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))]
+        k = next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))
+        past = states[k] if k < len(states) else None
+        states = states[:k]
     ends = lambda sts: no_slip and (sts[-1] if sts else on).alpha < 0.2  # noqa: E731
     if len(states) < len(rho) and not ends(states):
         states = _finish(stage, states, rho, c, no_slip, on)
-    if len(states) < len(rho) and ends(states):
-        end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
+    if len(states) < len(rho) and ends(states) and (states or on.alpha >= 0.0):
+        # (an onset at alpha < 0, reached by pinning continued in the control, has no branch from it)
         last = states[-1] if states else on
         x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
-        states.append(end.solve(0.0, x, tol=EXTREMUM_TOL))
+        end = branch_end(cfg, c.control, m, c.w, c.p, c.d).solve(0.0, x, tol=EXTREMUM_TOL)
+        off = lambda st: not (st.rho_a <= last.rho_a and st.a <= on.a * (1.0 + 1e-12))  # noqa: E731
+        if off(end) and past is not None:  # else bracketed between the last row and the next (alpha < 0)
+            end = _alpha_zero(stage, last, past) or end
+        if off(end):
+            # another state of the end equations (seen: a = 0.2405 beyond the onset's 0.2369, solved
+            # from the onset on 10 rows), not this branch's end
+            raise ConvergenceError("exact delamination (no-slip): the branch end (alpha = 0) solved off the "
+                                   f"branch (a = {end.a:.6g}, onset a = {on.a:.6g})",
+                                   {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max})
+        states.append(end)
         return states, stage, states[-1].a
     if not states:
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
     return states, stage, None
+
+
+def _alpha_zero(stage, good, past):
+    """The no-slip branch end (alpha = 0) between the delamination states ``good`` (alpha >= 0) and
+    ``past`` (alpha < 0, the next row), by Brent's method on alpha in rho_a (each state solved from the
+    nearer end), the state on the alpha >= 0 side; None where a solve fails."""
+    lo, hi = good, past
+    try:
+        for _ in range(200):
+            if abs(lo.rho_a - hi.rho_a) <= 1e-13 * (1e-3 + lo.rho_a):
+                break
+            t = lo.alpha / (lo.alpha - hi.alpha)  # regula falsi, kept off the ends (Illinois-like)
+            t = min(max(t, 0.05), 0.95)
+            v = lo.rho_a + t * (hi.rho_a - lo.rho_a)
+            st = stage.solve(v, stage.x(lo if t < 0.5 else hi), tol=EXTREMUM_TOL)
+            if st.alpha >= 0.0:
+                lo = st
+            else:
+                hi = st
+            if 0.0 <= lo.alpha < 1e-13:
+                break
+    except ConvergenceError:
+        return None
+    return lo
 
 
 def _finish(stage, states, rho, c, no_slip, on):
