@@ -56,13 +56,15 @@ def _predict(v, vs, xs, x0):
     return out
 
 
-def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False, start=None) -> list:
+def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False, start=None,
+          deep: int = None) -> list:
     """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
     predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
     (a fold the parameter cannot pass) returns the states solved up to there instead of raising.
     ``start`` = (value, state): a solved state of the stage the march continues from (not returned),
     so that the first step too is split when it fails (a delamination march from the onset whose
-    first row lies far from it, on a coarse grid). Runs of rows are solved in one compiled call
+    first row lies far from it, on a coarse grid); the first ``deep`` (``SPLIT_FROM_STATE``) splits of a
+    step continue from it. Runs of rows are solved in one compiled call
     (``Stage.path``); a row that fails there is retried here (its error, or the split)."""
     out = []  # the states solved at values[:len(out)]
     vs = [] if start is None else [float(start[0])]  # their parameters (after the start's)
@@ -89,8 +91,9 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False, st
             # the halves continue from the last solved state for the first few splits only: each split
             # of a step that fails for good (a branch end) costs a failed Newton solve, and 12 of them at
             # every stop doubled the time of a history (as before, deeper halves start from its unknowns)
+            deep = SPLIT_FROM_STATE if deep is None else deep
             mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok,
-                        start=(vs[-1], last) if depth < SPLIT_FROM_STATE else None)
+                        start=(vs[-1], last) if depth < deep else None, deep=deep)
             if len(mid) < 2:
                 out.extend(mid)
                 if stop_ok:
@@ -488,7 +491,22 @@ def _rows(stage, values, x0, c):
                              f"model)", f"alpha = {good.alpha:.8g}, theta at the clamp {good.theta_end:.8g}")
         except ConvergenceError:
             pass
-    return march(stage, values, x0)  # not shown to be the Case I limit: the march's own error
+    # not shown to be the Case I limit: on a grid four times finer from the last row (each split from the
+    # last solved state; on 10 rows a step in alpha jumped onto a state past vertical at the clamp that
+    # 1001 rows never meet), else the march's own error
+    values = list(values)
+    base = states[-1] if states else None
+    fine = ([getattr(base, stage.param)] if base is not None else [2 * values[0] - values[1]] if len(values) > 1
+            else [values[0]]) + values[len(states):]
+    rest = list(np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])]))
+    try:
+        more = march(stage, rest, stage.x(base) if base is not None else x0, stop_ok=True,
+                     start=(getattr(base, stage.param), base) if base is not None else None, deep=12)
+    except ConvergenceError:
+        more = []
+    if len(more) == len(rest) and all(abs(st.theta_end) < 0.5 * math.pi for st in more):
+        return states + more[3::4]
+    return march(stage, values, x0)
 
 
 
@@ -782,7 +800,7 @@ def _finish(stage, states, rho, c, no_slip, on):
     base = states[-1] if states else on
     fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
-    more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base))
+    more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base), deep=12)
     if no_slip:
         more = more[:next((i for i, s in enumerate(more) if s.alpha < 0.0), len(more))]
     kept = more[3::4]  # the history's own rows (every fourth value of the finer grid)
