@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from ..errors import ConvergenceError, DomainError, InputError
 from ..histories import History
@@ -19,6 +19,10 @@ __all__ = ["exact_history", "COLUMNS"]
 END_TOL = 1e-11  # the loading end condition (delta = delta_max or p = p_max) is solved to this
 EXTREMUM_TOL = 1e-12  # residuals of the stencil states of an extremum (``_extremum``): 1e-14 took ~10 more
 # shots a history and moved the summary by <= 1e-10 (lambda0 = 1.1-3, the four base cases), 1e-11 by 7e-10
+SPLIT_FROM_STATE = 3  # march's first splits of a failed step continue from the last solved state
+STENCIL_TOL = 1e-13  # the extremum's stencil states (``_extremum``): a row's observables carry ~10x its
+# tolerance (the shotless last Newton step), and the stencil's vertex ~1e3x the observables' error:
+# at 1e-12 a flat f_min's contact radius moved by 7e-9 with the row grid
 COLUMNS = ("stage", "a", "alpha", "p", "d", "delta", "f", "G", "stable")
 TURN_TOL = 1e-10  # a row counts as past the first turning point when the control has come back up by this
 H_FINAL = 2e-3  # width of the extremum's last stencil, relative to the onset's rho_a (``_extremum``)
@@ -52,30 +56,44 @@ def _predict(v, vs, xs, x0):
     return out
 
 
-def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) -> list:
+def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False, start=None,
+          deep: int = None) -> list:
     """Solve ``stage`` at each value in turn, continuing from the previous states (Lagrange
     predictor); a failed step is split in two (up to 12 times). With ``stop_ok`` a branch that ends
     (a fold the parameter cannot pass) returns the states solved up to there instead of raising.
-    Runs of rows are solved in one compiled call (``Stage.path``); a row that fails there is retried
-    here (its error, or the split)."""
-    out, xs, vs = [], [], []  # xs: the unknowns of the last (up to) PREDICT states of out
+    ``start`` = (value, state): a solved state of the stage the march continues from (not returned),
+    so that the first step too is split when it fails (a delamination march from the onset whose
+    first row lies far from it, on a coarse grid); the first ``deep`` (``SPLIT_FROM_STATE``) splits of a
+    step continue from it. Runs of rows are solved in one compiled call
+    (``Stage.path``); a row that fails there is retried here (its error, or the split)."""
+    out = []  # the states solved at values[:len(out)]
+    vs = [] if start is None else [float(start[0])]  # their parameters (after the start's)
+    xs = [] if start is None else [stage.x(start[1])]  # unknowns of the last (up to) PREDICT states
+    last = None if start is None else start[1]
+    k0 = len(vs)
     values = list(values)
-    while len(vs) < len(values):
-        got = stage.path(values[len(vs):], vs[-PREDICT:], xs, x0)
+    while len(out) < len(values):
+        got = stage.path(values[len(out):], vs[-PREDICT:], xs, x0)
         out.extend(got)
-        vs.extend(values[len(vs):len(vs) + len(got)])
+        vs.extend(values[len(vs) - k0:len(vs) - k0 + len(got)])
         xs = (xs + [stage.x(st) for st in got[-PREDICT:]])[-PREDICT:]
-        if len(vs) == len(values):
+        last = out[-1] if out else last
+        if len(out) == len(values):
             break
-        v = values[len(vs)]
+        v = values[len(out)]
         try:
             st = stage.solve(v, _predict(v, vs, xs, x0))
         except ConvergenceError:
-            if depth >= 12 or not vs:
+            if depth >= 12 or last is None:
                 if stop_ok:
                     return out
                 raise
-            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok)
+            # the halves continue from the last solved state for the first few splits only: each split
+            # of a step that fails for good (a branch end) costs a failed Newton solve, and 12 of them at
+            # every stop doubled the time of a history (as before, deeper halves start from its unknowns)
+            deep = SPLIT_FROM_STATE if deep is None else deep
+            mid = march(stage, [0.5 * (vs[-1] + v), v], xs[-1], depth + 1, stop_ok=stop_ok,
+                        start=(vs[-1], last) if depth < deep else None, deep=deep)
             if len(mid) < 2:
                 out.extend(mid)
                 if stop_ok:
@@ -83,6 +101,7 @@ def march(stage: Stage, values, x0, depth: int = 0, *, stop_ok: bool = False) ->
                 raise
             st = mid[-1]
         out.append(st)
+        last = st
         xs = (xs + [stage.x(st)])[-PREDICT:]
         vs.append(v)
     return out
@@ -152,7 +171,19 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         if len(states) > 1:
             _case_one_in_control(stage, c, states[-2], states[-1])
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
+    states[-1] = _tight(stage, a_vals[-1], states[-1])
     return [free] + states, states[-1]
+
+
+def _tight(stage, value, st):
+    """``st`` solved again to EXTREMUM_TOL: rows are solved to 1e-10 and agree with re-solves to ~1e-9,
+    from predictors that depend on the row grid; the states the summary reports (the end of loading,
+    the onset) and every later stage starts from must not (f_max moved by 3e-9 between 50 and 1001
+    rows). ``st`` itself where that solve fails."""
+    try:
+        return stage.solve(value, stage.x(st), tol=EXTREMUM_TOL)
+    except ConvergenceError:
+        return st
 
 
 def _case_one_end(stage, c, good, a_bad):
@@ -349,6 +380,7 @@ def _onset(cfg, c, m):
     except ConvergenceError:
         stage, par = (pin, lambda s: s.alpha) if ctl is None else (ctl, _control_value(c))
         on = _onset_between(stage, par, on_stage, pin, c, prev, st)
+    on = _tight(on_stage, c.w, on)
     return on, pin, ctl, turn
 
 
@@ -381,17 +413,60 @@ def _pinning(cfg, c, m):
     was continued in the control past a fold in alpha (``_bracket_in_control``), the first half of the
     rows is marched in alpha up to where that march handed over, the second half in the control."""
     on, pin, ctl, turn = _onset(cfg, c, m)
+    c.pin_parts = []  # (stage, its states in path order, m or the handover and the onset included)
     if c.n_pin <= 2:
         return [on], on
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
-        return _rows(pin, u * on.alpha, pin.x(m), c) + [on], on
+        rows = _rows(pin, u * on.alpha, pin.x(m), c)
+        c.pin_parts = [(pin, [m] + rows + [on])]
+        return rows + [on], on
     val = _control_value(c)
     if turn is m:
-        return _rows(ctl, val(m) + u * (val(on) - val(m)), ctl.x(m)[:1] + [0.0], c) + [on], on
+        values = val(m) + u * (val(on) - val(m))
+        rows = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(m)[:1] + [0.0], c)
+        c.pin_parts = [(ctl, [m] + rows + [on])]
+        return rows + [on], on
     first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
-    second = _rows(ctl, val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn)), ctl.x(turn), c)
+    values = val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn))
+    second = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(turn), c)
+    c.pin_parts = [(pin, [m] + first + [turn]), (ctl, [turn] + second + [on])]
     return first + second + [on], on
+
+
+def _rows_on_path(stage, values, c):
+    """Pinning rows in the control, each solved from the unknowns interpolated on the continuation that
+    found the onset (``_bracket_in_control``, adaptive steps); None when there is none or a row fails
+    (the caller then marches them). Marched from row to row (a Lagrange predictor through rows evenly
+    spaced in d) the rows could not follow alpha rising from 0.4 to 2.6 while d moved by 0.05 (near a
+    fold in d): Newton ran off to alpha + 2 pi k (alpha = 2.4e6) and the march failed later, a
+    ConvergenceError in the stress run (p = -0.921, rs = 0.076, lambda0 = 1.557)."""
+    out = []
+    for v in values:
+        g = _on_path(c, v, None)
+        if g is None:
+            return None
+        try:
+            st = stage.solve(v, g)
+        except ConvergenceError:
+            return None
+        if abs(st.alpha - g[-1]) > 0.1 or _outside(c, st) is not None:
+            return None  # not the continuation's state: the march decides (and names any end)
+        out.append(st)
+    return out
+
+
+def _on_path(c, v, x0):
+    """The unknowns at control value ``v`` interpolated on the continuation in the control that found the
+    onset (``_bracket_in_control``), else ``x0``."""
+    path = getattr(c, "ctl_path", None)
+    if not path or len(path[0]) < 2:
+        return x0
+    vs, xs = np.asarray(path[0], dtype=float), np.asarray(path[1], dtype=float)
+    order = np.argsort(vs)
+    if not vs[order[0]] <= v <= vs[order[-1]]:
+        return x0
+    return [float(np.interp(v, vs[order], xs[order, j])) for j in range(xs.shape[1])]
 
 
 def _rows(stage, values, x0, c):
@@ -416,7 +491,22 @@ def _rows(stage, values, x0, c):
                              f"model)", f"alpha = {good.alpha:.8g}, theta at the clamp {good.theta_end:.8g}")
         except ConvergenceError:
             pass
-    return march(stage, values, x0)  # not shown to be the Case I limit: the march's own error
+    # not shown to be the Case I limit: on a grid four times finer from the last row (each split from the
+    # last solved state; on 10 rows a step in alpha jumped onto a state past vertical at the clamp that
+    # 1001 rows never meet), else the march's own error
+    values = list(values)
+    base = states[-1] if states else None
+    fine = ([getattr(base, stage.param)] if base is not None else [2 * values[0] - values[1]] if len(values) > 1
+            else [values[0]]) + values[len(states):]
+    rest = list(np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])]))
+    try:
+        more = march(stage, rest, stage.x(base) if base is not None else x0, stop_ok=True,
+                     start=(getattr(base, stage.param), base) if base is not None else None, deep=12)
+    except ConvergenceError:
+        more = []
+    if len(more) == len(rest) and all(abs(st.theta_end) < 0.5 * math.pi for st in more):
+        return states + more[3::4]
+    return march(stage, values, x0)
 
 
 
@@ -496,6 +586,7 @@ def _bracket_in_control(c, m, prev):
                 break
             continue
         if st.G >= c.w:
+            c.ctl_path = (vs + [v], xs + [ctl.x(st)])  # start guesses for pinning's rows (``_pinning``)
             return good, good.alpha, st, st.alpha, (ctl, prev)
         good = st
         vs.append(v)
@@ -519,9 +610,75 @@ def _bracket_in_control(c, m, prev):
                           "lower w, or change the loading end",
                           {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
                            "a_max": c.a_max, "rs": c.rs})
+    _control_fold(cfg, c, ctl, last, prev)  # raises where the stall is the branch's extremum of the control
     raise ConvergenceError("exact pinning: G does not reach w before the pinning branch (continued in "
                            "the control variable) stalls",
                            {"w": c.w, "alpha": last.alpha, "G": last.G, "lc": last.lc, "lambda0": c.lambda0})
+
+
+def _control_fold(cfg, c, ctl, last, start):
+    """The continuation of pinning in the control stalled at ``last`` with G < w: when that is the
+    branch's largest retraction of the control (a fold in d, or in p under pressure control), shown on
+    the branch parameterized by the edge's other unknown (lambda1+ with no slip, lc frictionless) -- solved
+    states either side of it retracting the control less, the extremum located between them -- with G
+    < w there and falling past it, raise it as a DomainError: no pinned state retracts the control
+    further and the edge does not delaminate (the membrane would come off dynamically, outside the
+    quasi-static model). ``start``: where the continuation started (the fold's other side is past it).
+    Returns when not shown."""
+    name = ctl.unknowns[0]
+    if c.control == "displacement":
+        fx = Stage(cfg, ctl.edge, {**ctl.fixed, name: getattr(last, name)}, ("alpha",), ("clamp",), {}, name)
+    else:
+        fixed = {k: v for k, v in ctl.fixed.items() if k != "p"}
+        fx = Stage(cfg, ctl.edge, {**fixed, name: getattr(last, name)}, ("alpha", "p"), ("clamp", "d"),
+                   {"d": c.d}, name)
+    val = _control_value(c)
+    sgn = 1.0 if c.control == "displacement" else -1.0  # retracting: d rising, p falling
+    x0 = float(getattr(last, name))
+    try:
+        mid = fx.solve(x0, fx.x(last))
+    except ConvergenceError:
+        return
+    h = 1e-3 * (1.0 + abs(x0))
+    sts = {x0: mid}
+    for _ in range(12):  # widen until both sides retract the control less than the middle
+        for side in (-1.0, 1.0):
+            xs = sorted(sts)
+            near = xs[0] if side < 0 else xs[-1]
+            v = near + side * h
+            try:
+                sts[v] = fx.solve(v, fx.x(sts[near]))
+            except ConvergenceError:
+                return
+        xs = sorted(sts)
+        vals = [sgn * val(sts[x]) for x in xs]
+        k = int(np.argmax(vals))
+        if 0 < k < len(xs) - 1:
+            break
+        h *= 2.0
+    else:
+        return
+    states = [sts[x] for x in xs]
+    fold = _extremum(fx, states, val, -sgn, scale=xs[-1] - xs[0])
+    if not fold.G < c.w or not all(st.G < c.w for st in states) or abs(fold.theta_end) >= 0.5 * math.pi:
+        return
+    if _outside(c, fold) is not None:
+        return
+    # past the fold (the side the continuation did not reach) G falls: it does not reach w there either
+    k = int(np.argmax([sgn * val(st) for st in states]))
+    ahead = states[k + 1:] if float(getattr(start, name)) < xs[k] else states[:k][::-1]
+    if not ahead or not ahead[-1].G < fold.G:
+        return
+    vname = "d" if c.control == "displacement" else "p"
+    raise DomainError(f"the exact pinning branch ({c.slip}) retracts the control at most to {vname} = "
+                      f"{val(fold):.10g} (alpha = {fold.alpha:.8g}, G = {fold.G:.6g}), before G reaches w = "
+                      f"{c.w:g}: no pinned state beyond it, and the contact edge does not delaminate there "
+                      "(the membrane would come off dynamically, outside the quasi-static model)",
+                      f"the control's extremum along the branch parameterized by {name}, between solved "
+                      "states either side retracting it less, G falling past it",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max, "locator": val(fold)})
 
 
 _END_WORDS = {
@@ -578,31 +735,72 @@ def _delamination(cfg, c, m, on):
     g = (1.0 - _cluster(c.n_del)[1:]) ** 1.5
     g[-1] = min(g[-2] * 0.5, 1e-3)
     rho = on.rho_a * g
-    states = march(stage, rho, stage.x(on), stop_ok=True)
+    # continued from the onset itself, so that a first step that fails is split (on 10 rows the first
+    # delamination row lies 20 % of rho_a from the onset: the step failed, or passed the branch end)
+    states = march(stage, rho, stage.x(on), stop_ok=True, start=(on.rho_a, on))
     no_slip = c.slip == "no-slip"
+    past = None
     if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
-        states = states[:next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))]
+        k = next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))
+        past = states[k] if k < len(states) else None
+        states = states[:k]
+    ends = lambda sts: no_slip and (sts[-1] if sts else on).alpha < 0.2  # noqa: E731
+    if len(states) < len(rho) and not ends(states):
+        states = _finish(stage, states, rho, c, no_slip, on)
+    if len(states) < len(rho) and ends(states) and (states or on.alpha >= 0.0):
+        # (an onset at alpha < 0, reached by pinning continued in the control, has no branch from it)
+        last = states[-1] if states else on
+        x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
+        end = branch_end(cfg, c.control, m, c.w, c.p, c.d).solve(0.0, x, tol=EXTREMUM_TOL)
+        off = lambda st: not (st.rho_a <= last.rho_a and st.a <= on.a * (1.0 + 1e-12))  # noqa: E731
+        if off(end) and past is not None:  # else bracketed between the last row and the next (alpha < 0)
+            end = _alpha_zero(stage, last, past) or end
+        if off(end):
+            # another state of the end equations (seen: a = 0.2405 beyond the onset's 0.2369, solved
+            # from the onset on 10 rows), not this branch's end
+            raise ConvergenceError("exact delamination (no-slip): the branch end (alpha = 0) solved off the "
+                                   f"branch (a = {end.a:.6g}, onset a = {on.a:.6g})",
+                                   {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max})
+        states.append(end)
+        return states, stage, states[-1].a
     if not states:
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
-    if len(states) < len(rho) and not (no_slip and states[-1].alpha < 0.2):
-        states = _finish(stage, states, rho, c, no_slip)
-    if len(states) < len(rho) and no_slip and states[-1].alpha < 0.2:
-        end = branch_end(cfg, c.control, m, c.w, c.p, c.d)
-        last = states[-1]
-        x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
-        states.append(end.solve(0.0, x))
-        return states, stage, states[-1].a
     return states, stage, None
 
 
-def _finish(stage, states, rho, c, no_slip):
-    """Retry a delamination march that stopped early on a four times finer grid from its last state;
-    raise a ConvergenceError naming where it stopped if that fails too."""
+def _alpha_zero(stage, good, past):
+    """The no-slip branch end (alpha = 0) between the delamination states ``good`` (alpha >= 0) and
+    ``past`` (alpha < 0, the next row), by Brent's method on alpha in rho_a (each state solved from the
+    nearer end), the state on the alpha >= 0 side; None where a solve fails."""
+    lo, hi = good, past
+    try:
+        for _ in range(200):
+            if abs(lo.rho_a - hi.rho_a) <= 1e-13 * (1e-3 + lo.rho_a):
+                break
+            t = lo.alpha / (lo.alpha - hi.alpha)  # regula falsi, kept off the ends (Illinois-like)
+            t = min(max(t, 0.05), 0.95)
+            v = lo.rho_a + t * (hi.rho_a - lo.rho_a)
+            st = stage.solve(v, stage.x(lo if t < 0.5 else hi), tol=EXTREMUM_TOL)
+            if st.alpha >= 0.0:
+                lo = st
+            else:
+                hi = st
+            if 0.0 <= lo.alpha < 1e-13:
+                break
+    except ConvergenceError:
+        return None
+    return lo
+
+
+def _finish(stage, states, rho, c, no_slip, on):
+    """Retry a delamination march that stopped early on a four times finer grid from its last state
+    (the onset when none solved); raise a ConvergenceError naming where it stopped if that fails too."""
     k = len(states)
-    fine = [states[-1].rho_a] + list(rho[k:])
+    base = states[-1] if states else on
+    fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
-    more = march(stage, rest, stage.x(states[-1]), stop_ok=True)
+    more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base), deep=12)
     if no_slip:
         more = more[:next((i for i, s in enumerate(more) if s.alpha < 0.0), len(more))]
     kept = more[3::4]  # the history's own rows (every fourth value of the finer grid)
@@ -610,6 +808,9 @@ def _finish(stage, states, rho, c, no_slip):
         return states + kept
     if no_slip and more and more[-1].alpha < 0.2:  # the branch end, reached on the finer grid
         return states + kept + ([] if kept and kept[-1] is more[-1] else [more[-1]])
+    if not states and not more:
+        raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
+                               {"w": c.w, "lambda0": c.lambda0})
     last = (more or states)[-1]
     _check_membrane(c, [("delamination", s) for s in states + more])  # e.g. the edge stuck at the equator
     _delamination_end(stage, c, last, rest[len(more)])
@@ -687,68 +888,178 @@ def _vertex(x, y, c, h):
     return None if math.isnan(v) else float(v)
 
 
-def _extremum(stage, states, key, sign):
-    """Refine the minimum of sign*key over the delamination path: the vertex of the polynomial through
-    the (up to) five rows around the least row, then of the quartic through five states solved to
-    EXTREMUM_TOL on a stencil of a tenth of the row spacing around it (the objective is flat there: its
-    derivative, not its value, locates the minimum)."""
+def _extremum(stage, states, key, sign, scale=None, limits=None):
+    """The minimum of sign*key along ``stage`` near the least of ``states`` (solved states of the
+    stage, in path order), located on the continuous branch whatever the row grid: Brent's method on
+    the solved states between the least row's neighbours (one-sided at an end of ``states``: the
+    minimum may lie between an end and its neighbour, e.g. just before a no-slip branch end, or just
+    after the onset), then the vertex of the quartic through five states solved to EXTREMUM_TOL on a
+    stencil of ``H_FINAL`` * ``scale`` (the path's extent in its parameter; the onset's rho_a by
+    default) around it, inside ``limits`` (the parameter's range where the branch is smooth) (the
+    objective is flat there: its derivative, not its value, locates the minimum). An end of ``states``
+    is returned when the minimum is there."""
+    par = lambda st: float(getattr(st, stage.param))  # noqa: E731
     vals = [sign * key(s) for s in states]
     i = int(np.argmin(vals))
-    if i == 0 or i == len(states) - 1:
+    n = len(states)
+    if n < 2:
         return states[i]
-    lo, hi = states[i + 1].rho_a, states[i - 1].rho_a
+    lo, hi = sorted((par(states[max(i - 1, 0)]), par(states[min(i + 1, n - 1)])))
     if not hi > lo:
         return states[i]
-    j0, j1 = max(0, i - 2), min(len(states), i + 3)
-    h = 0.05 * (hi - lo)
-    c = _vertex([st.rho_a for st in states[j0:j1]], vals[j0:j1], states[i].rho_a, hi - lo)
-    c = states[i].rho_a if c is None else min(max(c, lo + 2 * h), hi - 2 * h)
-    vs, xs = [st.rho_a for st in states[j0:j1]][::-1], [stage.x(st) for st in states[j0:j1]][::-1]
-    # the final stencil's width: small enough that the quartic's O(h^4) bias is ~1e-12, large enough
-    # that states solved to EXTREMUM_TOL locate the vertex to ~1e-10 (both measured against 1001 rows)
-    h_min = H_FINAL * states[0].rho_a
-    if h < h_min and lo + 2 * h_min < hi - 2 * h_min:
-        h = h_min
-    pts, found = [], None
-    for _ in range(6):
-        grid = list(c + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
-        pts = stage.path(grid, vs, xs, xs[-1], tol=EXTREMUM_TOL)
-        if len(pts) < len(grid):
-            break
-        v = _vertex(grid, [sign * key(st) for st in pts], c, h)
-        if v is None:
-            break
-        if abs(v - c) <= 1.5 * h:
-            found = (v, grid, pts)
-            if h <= h_min:
+    known = {par(st): st for st in states[max(0, i - 3):i + 4]}
+
+    def solve(v, tol=EXTREMUM_TOL):
+        # the predictor's nodes: the nearest solved states, spread at least as far apart as the nearest is
+        # from v (Brent's last states lie within 1e-9 of each other: a cubic through them, extrapolated
+        # to a stencil point 1e-3 away, led Newton onto another branch)
+        near = []
+        for q in sorted(known, key=lambda q: abs(q - v)):
+            if len(near) == 4:
                 break
-            # the stencil's vertex is off by O(h^4): shrink the stencil around it, so the summary's other
-            # quantities (linear in the locator there) do not depend on the row spacing
-            c, h = v, max(0.1 * h, h_min)
-            c = min(max(c, lo + 2 * h), hi - 2 * h)
-            vs, xs = grid, [stage.x(st) for st in pts]
-            continue
-        c = min(max(v, lo + 2 * h), hi - 2 * h)
-    if found is not None:
-        v, grid, pts = found
-        fin = stage.path([v], grid, [stage.x(st) for st in pts], stage.x(pts[2]), tol=EXTREMUM_TOL)
-        return fin[0] if fin else stage.solve(v, stage.x(pts[2]), tol=EXTREMUM_TOL)
-    return min(pts + [states[i]], key=lambda st: sign * key(st))
+            if not near or min(abs(q - r) for r in near) >= 0.5 * abs(near[0] - v):
+                near.append(q)
+        xs = [stage.x(known[q]) for q in near]
+        got = stage.path([v], near, xs, xs[0], tol=tol)
+        try:
+            st = got[0] if got else stage.solve(v, xs[0], tol=tol)
+        except ConvergenceError:
+            if tol >= EXTREMUM_TOL:
+                raise
+            st = stage.solve(v, xs[0], tol=EXTREMUM_TOL)
+        known[v] = st
+        return st
+
+    worst = max(vals) + 1.0 + abs(max(vals))
+
+    def objective(v):
+        try:
+            return sign * key(solve(v))
+        except ConvergenceError:
+            return worst
+    width = hi - lo
+    scale = abs(par(states[0])) if scale is None else scale
+
+    def stencil(x):
+        """The final stencil's spacing about x: ``H_FINAL`` * scale, inside ``limits`` (a no-slip branch end
+        at alpha = 0 is not smooth through: a stencil reaching 4e-4 rho_a past it put the vertex 2e-8
+        off), down to a hundredth of that; toward detachment (rho_a -> 0) the observables vary on the
+        scale of rho_a itself: a stencil of +-0.26 rho_a put the quartic's vertex 2.5e-7 off; at
+        +-0.06 rho_a its O(h^4) error is ~1e-10."""
+        h = H_FINAL * scale
+        if stage.param == "rho_a":
+            h = min(h, 0.03 * x)
+        if limits is not None:
+            h = min(h, max(0.4 * min(x - limits[0], limits[1] - x), 0.01 * h))
+        return h
+
+    def polish(x):
+        """The vertex of the quartic through the stencil about x, re-centred (up to 5 times) until it
+        lies within 0.05 h of the centre: (x, converged: within 1.5 h at the last)."""
+        h = stencil(x)
+        near = False
+        if not h > 0.0:
+            return x, False
+        for _ in range(5):
+            grid = list(x + h * np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
+            try:
+                pts = [solve(v, STENCIL_TOL) for v in grid]
+            except ConvergenceError:
+                h *= 0.25  # a stencil reaching off the branch (past its end): a narrower one
+                continue
+            v = _vertex(grid, [sign * key(st) for st in pts], x, h)
+            if v is None:
+                return x, False
+            if abs(v - x) <= 0.05 * h:
+                return v, True
+            # re-centred on the vertex: off-centre the quartic's vertex carries its O(h^4) error (a
+            # vertex 0.075 h off the centre was 5e-8 off the centred one)
+            near = abs(v - x) <= 1.5 * h
+            x = min(max(v, lo), hi)
+        return x, near
+
+    x, done = None, False
+    if 0 < i < n - 1:
+        # on a grid dense next to the stencil, from the vertex of the rows' own polynomial (no solve)
+        j0, j1 = max(0, i - 2), min(n, i + 3)
+        c0 = _vertex([par(st) for st in states[j0:j1]], vals[j0:j1], par(states[i]), width)
+        if c0 is not None and lo < c0 < hi and width <= 8.0 * stencil(c0):
+            x, done = polish(c0)
+    best = states[i]
+    if not done:
+        # else (or where that did not converge) Brent's method on the values first: to a fifth of the
+        # stencil, which then locates the minimum by its derivative
+        res = minimize_scalar(objective, bounds=(lo, hi), method="bounded",
+                              options={"xatol": max(0.2 * stencil(par(states[i])), 1e-9 * width),
+                                       "maxiter": 200})
+        x = float(res.x)
+        if not res.fun < vals[i] and i in (0, n - 1):
+            return states[i]  # the minimum is the end of the path (a kink, a branch end)
+        # (an interior least row may lie closer to the minimum than its values resolve: polished all the same)
+        best = known[x] if x in known and res.fun < vals[i] else states[i]
+        x, _ = polish(x)
+    if not lo - 1e-12 * width <= x <= hi + 1e-12 * width:
+        return best
+    try:
+        fin = solve(x, STENCIL_TOL)
+    except ConvergenceError:
+        return best
+    # the vertex, unless clearly worse than the best state seen (a vertex of another feature): the values
+    # themselves carry the states' rounding (~1e-12 with p an unknown), Brent's minimum is only as good
+    # as the values (a locator ~1e-6 off on a flat minimum), the vertex's derivative is not
+    # (held against every state solved in the bracket, the stencils' too)
+    best = min([best] + [st for v, st in known.items() if lo <= v <= hi], key=lambda st: sign * key(st))
+    if sign * key(fin) <= sign * key(best) + 1e-10 * (1.0 + abs(sign * key(best))):
+        return fin
+    # the vertex is not the minimum (the observable is not smooth on the stencil's scale: near detachment,
+    # at a = 5e-4, successive vertices wandered by 6e-7): Brent's method on the values about the best
+    # state, to 1e-7 of the stencil (its locator as good as the values; the same on every row grid to 1e-9)
+    xb = par(best)
+    h = stencil(xb)
+    res = minimize_scalar(objective, bounds=(max(lo, xb - 2.0 * h), min(hi, xb + 2.0 * h)), method="bounded",
+                          options={"xatol": 1e-7 * h, "maxiter": 200})
+    got = known.get(float(res.x))
+    return got if got is not None and sign * key(got) < sign * key(best) else best
 
 
-def _first_turn(stage, m, pin, dl, key, sign):
+def _first_turn(stage, m, pin, dl, key, sign, parts=(), found=None, limits=None):
     """The turning point: where the control variable (sign * key falling) first stops falling on the
     way out (docs/contracts.md), not its least value over the branch. The end of loading ``m`` when
-    it rises at once; a pinning row when it turns during pinning; else refined on delamination
-    (``_extremum`` over the rows up to just past the first turn). ``pin`` ends with the onset."""
+    it rises at once; on pinning when it turns there (``parts``: the pinning stages and their states,
+    ``_pinning``), else on delamination, each refined on its stage (``_extremum`` over the states up
+    to just past the first turn: between rows, or between the end of loading or the onset and the
+    next row). ``pin`` ends with the onset. A state refined on pinning is recorded in ``found``
+    (its id: its part)."""
     seq = [m] + pin + dl
     vals = [sign * key(s) for s in seq]
     j = next((i for i in range(len(seq) - 1) if vals[i + 1] > vals[i] + TURN_TOL * (1.0 + abs(vals[i]))),
              len(seq) - 1)
     n_on = len(pin)  # index of the onset in seq
     if j < n_on:
-        return seq[j]
-    return _extremum(stage, seq[n_on:j + 2], key, sign)
+        return _on_pinning(parts, seq[j], key, sign, first=True, found=found)
+    return _extremum(stage, seq[n_on:j + 2], key, sign, limits=limits)
+
+
+def _on_pinning(parts, row, key, sign, first=False, found=None):
+    """The minimum of sign*key on the pinning part through the row ``row``, refined between its states
+    (``_extremum``); with ``first``, over its states up to just past ``row`` only (the first turn of
+    the control, which is monotone along a part continued in the control: only a part in alpha is
+    searched then). ``row`` when it lies on no such part. ``found`` (a dict) records the part of a new
+    state under its id."""
+    for part in parts:
+        stage, sts = part
+        if first and stage.param != "alpha":
+            continue
+        k = next((q for q, st in enumerate(sts) if st is row), None)
+        if k is None:
+            continue
+        span = abs(float(getattr(sts[-1], stage.param)) - float(getattr(sts[0], stage.param)))
+        lim = (0.0, math.inf) if stage.param == "alpha" else None
+        st = _extremum(stage, sts[:k + 2] if first else sts, key, sign, scale=span, limits=lim)
+        if found is not None:
+            found[id(st)] = part
+        return st
+    return row
 
 
 def exact_history(control: str, slip: str, *, p: float | None = None, d: float | None = None, w: float,
@@ -793,16 +1104,38 @@ def exact_history(control: str, slip: str, *, p: float | None = None, d: float |
     _check_membrane(c, [("delamination", s) for s in dl])
     key = (lambda s: s.d) if control == "displacement" else (lambda s: s.p)
     sign = -1.0 if control == "displacement" else 1.0
-    turn = _first_turn(stage, m, pin, dl, key, sign)
-    fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0)
-    fmin = min([fmin] + pin, key=lambda s: s.f)  # the most negative force of the history (A2), pinning too
-    extra = [s for s in (turn, fmin) if all(s is not t for t in mc + pin + dl)]
-    dl = sorted(dl + extra, key=lambda s: -s.rho_a)
+    parts, found = getattr(c, "pin_parts", []), {}
+    # delamination is smooth from rho_a = 0 (or the no-slip branch end) on, through the onset
+    limits = (dl[-1].rho_a if ends_at is not None else 0.0, math.inf)
+    turn = _first_turn(stage, m, pin, dl, key, sign, parts, found, limits)
+    fmin = _extremum(stage, [on] + dl, lambda s: s.f, 1.0, limits=limits)
+    low = min(pin, key=lambda s: s.f)
+    if low.f <= fmin.f:  # the most negative force of the history (A2) on pinning (or at the onset's kink)
+        fmin = min([fmin, _on_pinning(parts, low, lambda s: s.f, 1.0, found=found)], key=lambda s: s.f)
+    rows = mc + pin + dl
+    extra = [s for s in (turn, fmin) if all(s is not t for t in rows)]
+    if len(extra) == 2 and extra[0] is extra[1]:
+        extra = extra[:1]
+    for s in extra:
+        if id(s) in found:
+            pin = _insert_pinning(pin, *found[id(s)], s)
+        else:
+            dl.append(s)
+    dl = sorted(dl, key=lambda s: -s.rho_a)
     out = _assemble(c, mc, pin, dl, m, on, turn, fmin)
     if ends_at is not None:
         # the no-slip quasi-static branch ends at a finite contact radius (detachment from there is dynamic)
         out.inputs["delamination_ends_at_a"] = ends_at
     return out
+
+
+def _insert_pinning(pin, stage, sts, s):
+    """``pin`` with the refined state ``s`` of the pinning part (stage, states) inserted in path order."""
+    par = lambda st: float(getattr(st, stage.param))  # noqa: E731
+    sgn = 1.0 if par(sts[-1]) >= par(sts[0]) else -1.0
+    mine = [q for q, st in enumerate(pin) if any(st is t for t in sts)]
+    pos = next((q for q in mine if sgn * par(pin[q]) > sgn * par(s)), mine[-1] + 1 if mine else len(pin) - 1)
+    return pin[:pos] + [s] + pin[pos:]
 
 
 def _check_compressive(c, mc, m):
@@ -811,7 +1144,11 @@ def _check_compressive(c, mc, m):
     A tensile one means the free membrane is more concave at its apex than the substrate (its apex
     curvature p / (1 - lambda_c^-6) below -1/rs, a stricter bound than the large-stretch p > -1/rs):
     contact would not start at the apex, outside the model."""
-    bad = [s for s in mc[1:] if not s.f > 0.0]
+    # a state solved to 1e-10 carries a force error of ~1e-10 of the forces about it: at a contact radius
+    # of ~1e-6 (the first rows of a dense grid) a compressive force of ~1e-12 came out -2e-10, and 1001
+    # rows raised what 200 did not; a tensile branch is tensile well above that (|f| grows like a^2)
+    floor = -1e-8 * abs(m.f)
+    bad = [s for s in mc[1:] if not s.f > floor or s is m and not s.f > 0.0]
     if not bad:
         return
     crv = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
