@@ -15,7 +15,8 @@ control; the 300-row curve is the same scene made by ``adhfit simulate --scene``
 * ``eval``: ``CurveModel.predict`` at a new W_ad each call (so that no cached history is reused),
   against ``adhfit.loading.history`` with the same groups (the bare history): medians and their ratio;
 * ``lsq``: ``fit_curve`` on the 300-row curve, both slip conditions, warm (after one fit in the same
-  process), with and without profile intervals;
+  process), with and without profile intervals; and the model evaluations of one such fit without
+  profiles (a count, the same on a busy machine as on a quiet one);
 * ``cli``: ``python -m adhfit.cli fit CURVE --scene SCENE -o OUT --quiet`` wall time (a warm numba cache:
   one unmeasured run first), and ``--method mcmc``;
 * ``startup``: ``python -c "import adhfit"`` and ``python -m adhfit.cli --help`` wall time.
@@ -69,6 +70,16 @@ for profile in (True, False):
     for _ in range(repeat):
         t = time.perf_counter(); fit_curve(curve300, scene, profile=profile); ts.append(time.perf_counter() - t)
     out[f"lsq_300_{'profile' if profile else 'no_profile'}_s"] = statistics.median(ts)
+# the work itself, whatever the machine's load: model evaluations of one warm fit without profiles
+calls = []
+real = CurveModel.predict
+def counted(self, *a, **kw):
+    calls.append(1)
+    return real(self, *a, **kw)
+CurveModel.predict = counted
+fit_curve(curve300, scene, profile=False)
+CurveModel.predict = real
+out["lsq_300_no_profile_evals"] = len(calls)
 print(json.dumps(out))
 '''
 
@@ -141,6 +152,7 @@ ROWS = [("eval_no-slip_ms", "model evaluation, no-slip (ms)"), ("history_no-slip
         ("history_frictionless_ms", "bare history, frictionless (ms)"),
         ("lsq_300_profile_s", "least squares, 300 rows, both slips, profiles (s)"),
         ("lsq_300_no_profile_s", "least squares, 300 rows, both slips, no profiles (s)"),
+        ("lsq_300_no_profile_evals", "least squares, 300 rows, both slips, no profiles (model evaluations)"),
         ("cli_fit_s", "one-file CLI fit, wall (s)"), ("cli_mcmc_s", "one-file CLI MCMC fit, wall (s)"),
         ("import_adhfit_s", "python -c 'import adhfit', wall (s)"), ("cli_help_s", "adhfit --help, wall (s)")]
 
@@ -155,7 +167,7 @@ def report(res: dict, argv: list[str], machine: dict) -> str:
              "|---|" + "---:|" * (len(names) + (len(names) > 1))]
     for key, label in ROWS:
         vals = [res[n].get(key) for n in names]
-        cells = [f"{v:.3g}" if v is not None else "—" for v in vals]
+        cells = [("—" if v is None else f"{v:.0f}" if key.endswith("_evals") else f"{v:.3g}") for v in vals]
         ratio = [f"{vals[1] / vals[0]:.2g}×"] if len(names) > 1 and vals[0] and vals[1] else ([] if len(names) == 1 else ["—"])
         lines.append(f"| {label} | " + " | ".join(cells + ratio) + " |")
     a = res[names[0]]
