@@ -419,6 +419,16 @@ def _pinning(cfg, c, m):
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
         rows = _rows(pin, u * on.alpha, pin.x(m), c)
+        if not _presses_on(c, m, on) and any(_presses_on(c, m, s) for s in rows):
+            # the rows' small first steps in alpha took the branch that presses on, the bracket's long step
+            # the one that retracts (the onset's): two branches leave the end of loading with alpha > 0
+            # (``_alpha_starts_elsewhere``). The history retracts: its rows are marched in alpha back from
+            # the onset, on its branch (seen: frictionless, p = -0.496, rs = 0.116, lambda0 = 1.296; rows to
+            # delta = 0.329 above delta_max = 0.277 and G = 1.014 w, then the onset at delta = 0.221)
+            back = march(pin, list(u[::-1] * on.alpha), pin.x(on), stop_ok=True)
+            if len(back) != len(u) or any(_presses_on(c, m, s) or not s.G <= c.w for s in back):
+                raise ConvergenceError("exact pinning: rows on the onset's branch", {"w": c.w, "alpha": on.alpha})
+            rows = back[::-1]
         c.pin_parts = [(pin, [m] + rows + [on])]
         return rows + [on], on
     val = _control_value(c)
@@ -737,7 +747,13 @@ def _delamination(cfg, c, m, on):
     rho = on.rho_a * g
     # continued from the onset itself, so that a first step that fails is split (on 10 rows the first
     # delamination row lies 20 % of rho_a from the onset: the step failed, or passed the branch end)
-    states = march(stage, rho, stage.x(on), stop_ok=True, start=(on.rho_a, on))
+    # on steps no longer than DEL_STEP of the onset's rho_a, the history's rows picked from them: on 10 rows
+    # the first step (rho_a 0.646 -> 0.510) landed on another branch (a = 0.955 beyond the onset's 0.915,
+    # p rising to 11 where 50 and 1001 rows have it fall to 2.9), and the march stalled on it at a = 0.661
+    # (seen: pressure control, frictionless, d = 0.000476, rs = 10.47, lambda0 = 1.398)
+    fine, keep = _fine_grid(on.rho_a, rho, DEL_STEP * on.rho_a)
+    sol = march(stage, fine, stage.x(on), stop_ok=True, start=(on.rho_a, on))
+    states = [sol[i] for i in keep if i < len(sol)]
     no_slip = c.slip == "no-slip"
     past = None
     if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
@@ -767,6 +783,22 @@ def _delamination(cfg, c, m, on):
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
     return states, stage, None
+
+
+DEL_STEP = 0.05  # the longest step in rho_a of the delamination march, as a fraction of the onset's
+
+
+def _fine_grid(v0, values, h):
+    """``values`` (marched from ``v0``) with each step split into equal ones no longer than ``h``: (the
+    finer values, the index of each of ``values`` among them)."""
+    out, keep, prev = [], [], float(v0)
+    for v in values:
+        k = max(1, int(math.ceil(abs(v - prev) / h - 1e-9)))
+        out.extend(prev + (v - prev) * np.arange(1, k + 1) / k)
+        out[-1] = float(v)
+        keep.append(len(out) - 1)
+        prev = float(v)
+    return [float(x) for x in out], keep
 
 
 def _alpha_zero(stage, good, past):
