@@ -281,14 +281,20 @@ def _case_one_end(err, v, c, pc, no_slip, a_m, u_mc):
         return None
     pin = int(err[0]) == 1
     code = (K.PIN_NS if no_slip else K.PIN_FR) if pin else (K.DEL_NS if no_slip else K.DEL_FR)
+    d_fix, j0_end = _end_of_loading_again(v, c, pc, a_m, u_mc)
+    if j0_end is None:
+        return None
+    return case_one_end(code, pc, float(err[4]), float(err[3]), float(err[2]), c, float(v["w"]), a_m, j0_end, d_fix)
+
+
+def _end_of_loading_again(v, c, pc, a_m, u_mc) -> tuple[float, float | None]:
+    """(d, J0 at the end of loading) solved again on the failed run's making-contact grid ``u_mc`` as the
+    kernel solved it (d = 0 under displacement control); J0 None when that solve fails."""
     d_fix = float(v["d"]) if pc else 0.0
     p_cr = float(critical_pressure(d_fix)) if pc else 0.0
     _, out_mc, st = K._making_contact(pc, c, 0.0 if pc else float(v["p"]), d_fix, p_cr, a_m * u_mc,
                                       np.full(5, math.nan))
-    if st != K.H_OK:
-        return None
-    return case_one_end(code, pc, float(err[4]), float(err[3]), float(err[2]), c, float(v["w"]), a_m,
-                        float(out_mc[6, -1]), d_fix)
+    return d_fix, (float(out_mc[6, -1]) if st == K.H_OK else None)
 
 
 def _equator_end(err, v, c, pc, a_m, u_mc):
@@ -298,14 +304,10 @@ def _equator_end(err, v, c, pc, a_m, u_mc):
     from .core.limit import equator_end  # noqa: PLC0415
     if int(err[1]) != F_STALLED or int(err[0]) != 1 or c <= 0:
         return None
-    d_fix = float(v["d"]) if pc else 0.0
-    p_cr = float(critical_pressure(d_fix)) if pc else 0.0
-    _, out_mc, st = K._making_contact(pc, c, 0.0 if pc else float(v["p"]), d_fix, p_cr, a_m * u_mc,
-                                      np.full(5, math.nan))
-    if st != K.H_OK:
+    d_fix, j0_end = _end_of_loading_again(v, c, pc, a_m, u_mc)
+    if j0_end is None:
         return None
-    return equator_end(pc, float(err[4]), float(err[3]), float(err[2]), c, float(v["w"]), a_m,
-                       float(out_mc[6, -1]), d_fix)
+    return equator_end(pc, float(err[4]), float(err[3]), float(err[2]), c, float(v["w"]), a_m, j0_end, d_fix)
 
 
 def _raise(failures, v, info, c, pc, limit=None):
