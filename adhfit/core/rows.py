@@ -10,9 +10,10 @@ import math
 
 import numpy as np
 
-from .branches import DEL_NS, PIN_NS, admissible
+from .branches import DEL_NS, PIN_NS, admissible, observe
 from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, extremum
 from .jit import jit
+from .solve import solve_one
 
 __all__ = ["S_ONSET", "S_FMIN", "S_TP", "extrema", "assemble", "apex"]
 
@@ -88,24 +89,46 @@ def _first_turn(out_pin, out_dl, key, sign, end):
 
 
 @jit
+def _walk_in(code, pressure, locs, xs, implicit, out, kappa, c, w, a_m, L_m, d_fix, end_x, end_k, eps, obs):
+    """The state at locator ``eps`` (below the first pinning row's) on the rows' own branch, into
+    ``obs``: whether it solved and is admissible.
+
+    Two branches can leave the end of loading (frictionless: one retracting, one pressing on); a
+    predictor interpolated from rows a spacing away can land on the other one (seed 11, 10 rows:
+    a = 1.0021 a_max on the pressing branch while the rows retract). The locator is therefore halved
+    from the first row down to ``eps``, each state predicted between the end of loading and the last
+    state solved, so that every start lies within O(h^2) of the rows' branch.
+    """
+    lc_prev, x_prev, k_prev = locs[0], xs[0] if implicit else 0.0, out[2, 0]
+    lc = lc_prev
+    x, k = x_prev, k_prev
+    while lc > eps:
+        lc = max(0.5 * lc, eps)
+        t = lc / lc_prev
+        xg = end_x + (x_prev - end_x) * t if implicit else 0.0
+        kg = end_k + (k_prev - end_k) * t if pressure else kappa
+        x, k, st = solve_one(code, pressure, lc, kg, xg, c, w, a_m, L_m, d_fix)
+        if st != 0:
+            return False
+        lc_prev, x_prev, k_prev = lc, x, k
+    ok = observe(code, x, k, lc, c, w, a_m, obs)
+    return admissible(ok, obs)
+
+
+@jit
 def _rises_at_once(pressure, pin, kappa_dc, c, w, a_m, L_m, d_fix, key, sign, end_obs):
     """Whether the control variable rises as pinning starts: the state at a locator 1e-4 of the first
-    pinning row's has sign * key below the end of loading's (the turning point is then the end of
-    loading itself, whatever the row grid)."""
+    pinning row's, on the rows' branch (:func:`_walk_in`), has sign * key below the end of loading's
+    (the turning point is then the end of loading itself, whatever the row grid)."""
     code, locs, xs, implicit, out = pin
-    m = min(2, locs.size)
     eps = 1e-4 * locs[0]
-    # predictors from pinning's own start (locator 0: x = 1 no slip, a_max frictionless) and its first rows
-    rl, rx, rk = np.empty(m + 1), np.full(m + 1, math.nan), np.empty(m + 1)
-    rl[0], rk[0] = 0.0, end_obs[2]
-    rl[1:], rk[1:] = locs[:m], out[2, :m]
-    if implicit:
-        rx[0] = 1.0 if code == PIN_NS else a_m
-        rx[1:] = xs[:m]
-    st, loc, obs, ok = extremum(code, pressure, eps, eps, math.nan, rl, rx, rk, 0.0 if pressure else kappa_dc, c,
-                                w, a_m, L_m, d_fix, key, sign, BRENT_XTOL, BRENT_RTOL, BRENT_MAXITER)
+    obs = np.empty(7)
+    end_x = (1.0 if code == PIN_NS else a_m) if implicit else 0.0
+    if not _walk_in(code, pressure, locs, xs, implicit, out, 0.0 if pressure else kappa_dc, c, w, a_m,
+                    L_m, d_fix, end_x, end_obs[2], eps, obs):
+        return False
     v0 = sign * end_obs[key]
-    return st == E_OK and admissible(ok, obs) and sign * obs[key] < v0 - TURN_TOL * (1.0 + abs(v0))
+    return sign * obs[key] < v0 - TURN_TOL * (1.0 + abs(v0))
 
 
 @jit
