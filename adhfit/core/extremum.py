@@ -21,7 +21,7 @@ from .newton import STEP
 from .solve import derivative_row, solve_one
 
 __all__ = ["E_OK", "E_SOLVE", "E_SEARCH", "E_NOCONV", "BRENT_XTOL", "BRENT_RTOL", "BRENT_MAXITER",
-           "END_PROBES", "extremum"]
+           "END_PROBES", "ROOT_TOL", "extremum"]
 
 E_OK, E_SOLVE, E_SEARCH, E_NOCONV = 0, 1, 2, 3
 #: the root search's tolerances (brentq's xtol, rtol and maxiter)
@@ -31,6 +31,9 @@ BRENT_MAXITER = 200
 #: probes toward an end of the bracket that does not solve, at 1/2, 1/4, ... of the way left (2^-30
 #: of a row spacing is far below the 1e-8 the summary values are held to)
 END_PROBES = 30
+#: on the no-slip delamination branch next to its own end, a root of the slope is kept over a point
+#: better by at most this (relative): the states there differ in value by their rounding only
+ROOT_TOL = 1e-11
 #: step budget of the continuation that solves a state whose predictor failed (a row spacing away at
 #: most: a few steps where the branch is there, and no long stall where it is not)
 FALLBACK_STEPS = 24
@@ -184,11 +187,13 @@ def _toward(code, pressure, good, s_good, bad, rl, rx, rk, kappa, c, w, a_m, L_m
 
 @jit
 def extremum(code, pressure, lo, hi, mid, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
-             xtol, rtol, maxiter):
+             xtol, rtol, maxiter, open_lo=False):
     """The state in [lo, hi] where ``sign * obs[key]`` is largest: a root of the slope, or an end.
 
     The slope is taken at lo, hi and ``mid`` (the best row inside, when lo < mid < hi; NaN for none);
-    an end without a finite slope is approached from its neighbour (:func:`_toward`); every pair of
+    an end without a finite slope is approached from its neighbour (:func:`_toward`), and so is
+    ``lo`` when ``open_lo`` (the no-slip delamination branch's own end, a fold in the locator a,
+    where the slope's sign is not to be trusted: seed 7 had it the wrong way); every pair of
     neighbouring points whose slopes differ in sign is searched (Brent), and the best state found
     is kept.
 
@@ -211,7 +216,7 @@ def extremum(code, pressure, lo, hi, mid, rl, rx, rk, kappa, c, w, a_m, L_m, d_f
         pts, slopes, vals = np.empty(cap), np.empty(cap), np.empty(cap)
         v_best, s_lo = _probe(code, pressure, lo, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key,
                               sign, best_obs)
-        pts[0], slopes[0], vals[0] = lo, s_lo, v_best
+        pts[0], slopes[0], vals[0] = lo, (math.nan if open_lo else s_lo), v_best
         n = 1
         if lo < mid < hi:
             v, s = _probe(code, pressure, mid, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
@@ -237,9 +242,19 @@ def extremum(code, pressure, lo, hi, mid, rl, rx, rk, kappa, c, w, a_m, L_m, d_f
             n = _toward(code, pressure, pts[n_main - 2], slopes[n_main - 2], pts[n_main - 1], rl, rx,
                         rk, kappa, c, w, a_m, L_m, d_fix, key, sign, pts, slopes, vals, n)
         order = np.argsort(pts[:n])
+        # next to the no-slip delamination end (a fold in the locator) the states' values carry a
+        # rounding of ~1e-11 (seed 7): a probe toward that end is kept over the bracket's points only
+        # when better beyond it, and a root of the slope replaces a row within it. Elsewhere the
+        # comparisons are exact (a tolerance there moved fits of frictionless curves)
+        tol = ROOT_TOL * (1.0 + abs(v_best)) if code == DEL_NS else 0.0
         for q in range(n):
-            if vals[order[q]] > v_best:
+            margin = 0.0 if order[q] < n_main else tol
+            if vals[order[q]] > v_best + margin:
                 best, v_best = pts[order[q]], vals[order[q]]
+        soft = False  # the best is a row, not a probe toward the open end
+        for q in range(n_main):
+            if pts[q] == best and not (q == 0 and open_lo):
+                soft = code == DEL_NS
         for q in range(n - 1):
             ia, ib = order[q], order[q + 1]
             sa, sb = slopes[ia], slopes[ib]
@@ -251,8 +266,8 @@ def extremum(code, pressure, lo, hi, mid, rl, rx, rk, kappa, c, w, a_m, L_m, d_f
                 return st, root, obs, False
             v = _value(code, pressure, root, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix, key, sign,
                        obs)
-            if v > v_best:
-                best, v_best = root, v
+            if v > v_best - (ROOT_TOL * (1.0 + abs(v_best)) if soft else 0.0):
+                best, v_best, soft = root, v, False
         if v_best > -math.inf:  # admissible, so ok
             x, k, st = _solve_at(code, pressure, best, rl, rx, rk, kappa, c, w, a_m, L_m, d_fix)
             if st == 0:

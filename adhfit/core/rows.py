@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from .branches import DEL_NS, PIN_NS, admissible, observe
-from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, extremum
+from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, ROOT_TOL, extremum
 from .jit import jit
 from .solve import solve_one
 
@@ -44,9 +44,12 @@ def _search(code, pressure, locs, xs, implicit, out, i, lo, hi, kappa_dc, c, w, 
     else:
         lo, hi = locs[i], locs[i]
     # the best row's own slope too: with the bracket's ends it tells on which side the extremum is
+    # the no-slip delamination branch's last row is its own end (a fold in a): its slope is not
+    # trusted, the end is approached from inside
+    open_lo = code == DEL_NS and lo != hi and lo == locs[n - 1]
     st, loc, obs, ok = extremum(code, pressure, lo, hi, locs[i], rl, rx, rk, 0.0 if pressure else kappa_dc,
                                 c, w, a_m, L_m, d_fix, key, sign, BRENT_XTOL, BRENT_RTOL,
-                                BRENT_MAXITER)
+                                BRENT_MAXITER, open_lo)
     if st == E_OK and not admissible(ok, obs):
         st = -1
     return loc, obs, st
@@ -79,13 +82,19 @@ def _first_turn(out_pin, out_dl, key, sign, end):
     finds the end of loading itself)."""
     n_pin, n_dl = out_pin.shape[1], out_dl.shape[1]
     n = n_pin + n_dl
-    prev = end
+    # the fall is measured from the greatest value so far, not from the row before: on a dense grid
+    # a slow fall moves each row by less than TURN_TOL (seed 7: rows 1001 fell by 6e-10 in all,
+    # < 1e-10 a row, past a minimum of delta 1e-5 in alpha from the branch end)
+    peak, j_peak = end, -1
     for j in range(n):
         v = sign * (out_pin[key, j] if j < n_pin else out_dl[key, j - n_pin])
-        if v < prev - TURN_TOL * (1.0 + abs(prev)):
-            return max(j - 1, 0), max(prev, v) if j > 0 else v
-        prev = v
-    return n - 1, prev
+        if v < peak - TURN_TOL * (1.0 + abs(peak)):
+            return (j_peak, peak) if j_peak >= 0 else (0, v)
+        if v > peak:
+            peak, j_peak = v, j
+    if j_peak < 0:
+        return n - 1, sign * (out_pin[key, n - 1] if n - 1 < n_pin else out_dl[key, n - 1 - n_pin])
+    return j_peak, peak
 
 
 @jit
@@ -197,7 +206,11 @@ def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, e
         if st != E_OK:
             err[0], err[1], err[2], err[3] = stage, e, loc, st
             return 1
-        if sign * obs[key] < best:
+        # next to the no-slip delamination end the search's root may be below the row by the states'
+        # rounding (seed 7 kept a row 1.6e-8 in a from the root so); the branch end itself (the last
+        # delamination row) is kept over anything not better outright
+        tol = ROOT_TOL * (1.0 + abs(best)) if code == DEL_NS and i != locs.size - 1 else 0.0
+        if sign * obs[key] < best - tol:
             # the row itself is better: the search could not re-solve an end of its bracket (the
             # end of a no-slip delamination branch, a fold); the extremum is that row
             loc, obs = locs[i], out[:, i].copy()
