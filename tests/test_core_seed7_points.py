@@ -15,10 +15,11 @@ last on the no-slip delamination branch only: applied to every branch it moved t
 optimum of the plan's noiseless pressure-control frictionless fit (ΔBIC 29.6 -> 31.7). The reference values are stored below (so
 the test takes seconds); ``--runslow`` recomputes them.
 
-The fourth scene (pressure control) is not fixed: its least force and pressure lie at the branch's
-own end, alpha = 0, where the engine's unknown t varies with alpha^2 (G = w), so its rows stop at
-alpha ~ 1.9e-7 where the next step in t does not resolve, and the summary is 1.4e-7 off in f at
-every row count (1.3e-8 between 200 and 1001 rows, whose ends differ). Held as a strict xfail.
+The fourth scene (pressure control) has its least force and pressure at the branch's own end,
+alpha = 0, where the engine's unknown t varies with alpha^2 (G = w): its rows stopped at
+alpha ~ 1.9e-7 and the summary was 1.4e-7 off in f at every row count. The end is now solved on it
+(``adhfit.core.branch_end``), and the contact angle is taken as 2 asin(sqrt(y / 2)) instead of
+arccos(1 - y), which kept only ~sqrt(eps) of a small angle.
 """
 from __future__ import annotations
 
@@ -43,7 +44,7 @@ S1 = dict(control="displacement", slip="no-slip", p=-0.4222219219416208, w=0.000
 #: 200 rows: a row 1.6e-8 in a from the slope's root kept over it, better by the states' rounding
 S2 = dict(control="displacement", slip="no-slip", p=-0.7052941450650454, w=0.00018141678358245549,
           rs=0.3787133056412864, a_max=0.04905663724123769, lambda0=7.247911053236171)
-#: f_min = turning point at the branch's own end, alpha = 0, which the engine stops short of (xfail)
+#: f_min = turning point at the branch's own end, alpha = 0, which the rows in t stop ~1e-7 short of
 S3 = dict(control="pressure", slip="no-slip", d=0.09668910349781146, w=0.00014598863978152807,
           rs=72.36182049100117, p_max=3.404350312396015, lambda0=2.0)
 SCENES = {"s0": S0, "s1": S1, "s2": S2, "s3": S3}
@@ -174,10 +175,9 @@ def test_summary_values_match_the_reference_at_every_row_count(name):
         _check(adhfit.simulate(**SCENES[name], points=n).summary, REFERENCE[name], (name, n))
 
 
-@pytest.mark.xfail(strict=True, reason="the no-slip delamination branch's own end is solved in t, "
-                   "whose G = w root varies with alpha^2: the rows stop at alpha ~ 1.9e-7 (2.1e-7 on "
-                   "200 rows), not at alpha = 0, where f_min and the turning point lie (1.4e-7 in f)")
 def test_an_extremum_at_the_branch_end_matches_the_reference():
+    """f_min and the turning point at the branch's own end, alpha = 0: the end is solved there
+    (t held at its bound, a and p solved: ``core.branch_end``), not approached to ~1e-7 in t."""
     for n in GRIDS:
         _check(adhfit.simulate(**S3, points=n).summary, REFERENCE["s3"], ("s3", n))
 

@@ -30,3 +30,70 @@ def test_turning_point_on_the_rows_branch(points):
     assert s["turning_point"]["p"] <= p_min_rows + 1e-12
     for q in ("f", "p", "a"):
         assert abs(s["turning_point"][q] - dense.summary["turning_point"][q]) < 1e-8
+
+
+# the turning point at the no-slip delamination branch's own end (alpha = 0): the rows in t stopped
+# ~1e-7 in alpha short of it, and arccos(1 - y) gave their angles to ~sqrt(eps), so the gap of the
+# last rows jittered by 4e-10 and the turning point found on them moved by 4e-8 to 1.6e-7 in a with
+# the row count (stress seed 11). Reference: tests/test_core_seed7_points.end_reference (30 digits,
+# delamination followed in alpha to 0 by the mpmath model, Brent on the turning point), run once:
+#   PYTHONPATH=. python -c "from tests.test_core_seed7_points import end_reference, _kw; ..."
+END_TURN = {"control": "displacement", "slip": "no-slip", "p": -0.7691980581649935,
+            "w": 0.00012370439688703735, "rs": 0.4331708815185013, "a_max": 0.3060316951058363,
+            "lambda0": 3.14978611044507}
+END_TURN_REF = {"f_max": 0.45292135884634216,
+                "onset": (0.44092759009277316, -0.7691980581649935, 0.3060316951058363),
+                "f_min": (0.44083986092337163, -0.7691980581649935, 0.30558856202663875),
+                "turning_point": (0.44084060307263323, -0.7691980581649935, 0.305548005494014)}
+
+
+@pytest.mark.parametrize("points", [10, 11, 50, 200, 1001])
+def test_turning_point_at_the_branch_end_matches_the_reference(points):
+    s = adhfit.simulate(**END_TURN, points=points).summary
+    assert s["f_max"] == pytest.approx(END_TURN_REF["f_max"], abs=1e-10)
+    for k in ("onset", "f_min", "turning_point"):
+        for q, r in zip(("f", "p", "a"), END_TURN_REF[k]):
+            assert s[k][q] == pytest.approx(r, abs=1e-9), (k, q)
+
+
+@pytest.mark.slow
+def test_turning_point_reference_recomputed():
+    from tests.test_core_seed7_points import _kw, end_reference
+    got = end_reference(**_kw(END_TURN))
+    assert got["f_max"] == pytest.approx(END_TURN_REF["f_max"], abs=1e-14)
+    for k in ("onset", "f_min", "turning_point"):
+        for g, r in zip(got[k], END_TURN_REF[k]):
+            assert g == pytest.approx(r, abs=1e-13), k
+
+
+# no-slip pinning from the end of loading: arccos(1 - y) of a y below 0 by rounding (G = 5e-17 at
+# the first step) was NaN, so the branch "ended at G = 5.4e-17" and a DomainError said no solution
+# exists (stress seed 24). The 30-digit model (tests/reference/mp_model.history) solves it: these
+# are its end-of-loading force and onset.
+PIN_START = {"control": "pressure", "slip": "no-slip", "d": 0.28593713677867805,
+             "w": 2.5130415923111964, "rs": 0.3682577259179927, "a_max": 0.2983521018435508,
+             "lambda0": 2.0}
+PIN_START_REF = {"f_max": 1.140519513002203,
+                 "onset": (-1.4220857483876497, -0.6134582130502264, 0.2983521018435508)}
+
+
+@pytest.mark.parametrize("points", [10, 200])
+def test_pinning_from_its_start_is_solved(points):
+    s = adhfit.simulate(**PIN_START, points=points).summary
+    assert s["f_max"] == pytest.approx(PIN_START_REF["f_max"], abs=1e-9)
+    for q, r in zip(("f", "p", "a"), PIN_START_REF["onset"]):
+        assert s["onset"][q] == pytest.approx(r, abs=1e-9), q
+
+
+@pytest.mark.slow
+def test_pinning_start_reference_recomputed():
+    import mpmath as mp
+
+    from tests.reference import mp_model as M
+    sc = PIN_START
+    with mp.workdps(M.DPS):
+        h = M.history("pressure", "no-slip", d=mp.mpf(sc["d"]), w=mp.mpf(sc["w"]), rs=mp.mpf(sc["rs"]),
+                      a_max=mp.mpf(sc["a_max"]))
+        assert float(h.end.f) == pytest.approx(PIN_START_REF["f_max"], abs=1e-14)
+        for g, r in zip((h.onset.f, h.onset.kap, h.onset.a), PIN_START_REF["onset"]):
+            assert float(g) == pytest.approx(r, abs=1e-13)

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from .branch_end import END_ALPHA, end_stretch, solve_end
 from .branches import (CLAMP_NEAR, DEL_FR, DEL_NS, MC, PIN_FR, PIN_NS, admissible, clamp_margin,
                        evaluate_batch, first_bad, is_implicit, state)
 from .continuation import F_OK, F_STALLED, SCALE_LINEAR, SCALE_LOG, SCALE_SQRT, follow, max_steps
@@ -150,7 +151,42 @@ def _delamination(pressure, no_slip, kappa_dc, c, w, a_m, L_m, d_fix, onset, on_
     a_dl = branch_end + (a_on - branch_end) * u_dl
     xs, out, st = _to_branch_end(code, pressure, a_on, x_on, k_on, a_dl, (res[4], res[5], res[6]),
                                  kappa_dc, c, w, a_m, L_m, d_fix, err)
+    if st == H_OK:
+        branch_end = _exact_end(pressure, a_dl, xs, out, c, w, a_m, L_m, d_fix)
     return a_dl, xs, out, branch_end, st
+
+
+@jit
+def _exact_end(pressure, a_dl, xs, out, c, w, a_m, L_m, d_fix):
+    """The last delamination row (where the continuation in t stopped, ~1e-7 in alpha short of the
+    branch's own end) replaced by the end itself, alpha = 0 (:mod:`.branch_end`), when that solves
+    just beyond it; returns the branch end's radius."""
+    n = a_dl.size
+    last = a_dl[n - 1]
+    if n < 2:
+        return last
+    t_e = end_stretch(xs[n - 1], w)
+    if not math.isfinite(t_e):
+        return last
+    obs = np.empty(7)
+    a_e, k_e, good = solve_end(pressure, t_e, last, out[2, n - 1], c, w, a_m, L_m, d_fix, obs)
+    # the continuation stopped next to the end (alpha small), and the end lies just beyond its last
+    # row (a falls toward it), where the last two rows' angles extrapolate to alpha = 0 (a regular
+    # function of a there): the end it was approaching, not another root of the material condition
+    # (from the last row with at least twice the last angle: on a dense grid the last two are too
+    # close for the extrapolation)
+    al1 = out[1, n - 1]
+    j = n - 2
+    while j > 0 and out[1, j] < 2.0 * al1:
+        j -= 1
+    al2 = out[1, j]
+    a_pred = last - al1 * (a_dl[j] - last) / (al2 - al1) if al2 > al1 else math.nan
+    if (good and al1 < END_ALPHA and a_e <= last
+            and abs(a_e - a_pred) <= 0.1 * (a_dl[j] - a_e) + 1e-14):
+        a_dl[n - 1], xs[n - 1] = a_e, t_e
+        out[:, n - 1] = obs
+        return a_e
+    return last
 
 
 @jit
