@@ -18,7 +18,8 @@ from .branches import DEL_NS, admissible, material_residual, observe, state, unp
 from .jit import jit
 from .newton import STEP
 
-__all__ = ["END_ALPHA", "END_ULPS", "END_MAXITER", "end_stretch", "solve_end"]
+__all__ = ["END_ALPHA", "END_ULPS", "END_MAXITER", "END_GOLDEN", "end_stretch", "solve_end", "stretch_at",
+           "end_extremum"]
 
 #: the continuation's last state counts as next to the branch end below this contact angle (it
 #: stops ~1e-7 short of alpha = 0; a stall elsewhere is not the end)
@@ -86,3 +87,64 @@ def solve_end(pressure, t_end, a0, k0, c, w, a_m, L_m, d_fix, obs):
     if not (done and a > 0.0):
         return a, k, False
     return a, k, admissible(observe(DEL_NS, t_end, k, a, c, w, a_m, obs), obs)
+
+
+#: golden-section steps of :func:`end_extremum` (0.618^60 of the bracket in alpha)
+END_GOLDEN = 60
+
+
+@jit
+def stretch_at(alpha, t_end, w):
+    """t at contact angle ``alpha`` on the root of eq. (62) with G = w that ends at ``t_end``."""
+    s = math.sqrt(max(2.0 * w - math.sin(alpha) ** 2, 0.0))
+    lo, hi = math.cos(alpha) - s, math.cos(alpha) + s
+    return lo if abs(lo - t_end) <= abs(hi - t_end) else hi
+
+
+@jit
+def _value_at(pressure, alpha, ends, c, w, a_m, L_m, d_fix, key, sign, obs):
+    """sign * obs[key] at the state of angle ``alpha`` (-inf where it does not solve), its a and
+    kappa from predictors linear in alpha between the branch end and the bracket's other end
+    (``ends`` = alpha_hi, t_end, a_end, kappa_end, a_hi, kappa_hi); returns (value, a, kappa)."""
+    alpha_hi, t_end, a_e, k_e, a_hi, k_hi = ends
+    r = alpha / alpha_hi
+    t = t_end if alpha == 0.0 else stretch_at(alpha, t_end, w)
+    a, k, good = solve_end(pressure, t, a_e + (a_hi - a_e) * r, k_e + (k_hi - k_e) * r, c, w, a_m, L_m,
+                           d_fix, obs)
+    if not good:
+        return -math.inf, a, k
+    return sign * obs[key], a, k
+
+
+@jit
+def end_extremum(pressure, ends, c, w, a_m, L_m, d_fix, key, sign, obs):
+    """The state of largest sign * obs[key] with alpha in [0, alpha_hi] next to the branch end, the
+    states parametrised by alpha (t in closed form, a and kappa solved: well conditioned down to
+    alpha = 0, where the rows in t are not): golden section on (0, alpha_hi), then the end itself.
+    ``ends`` = (alpha_hi, t_end, a_end, kappa_end, a_hi, kappa_hi). Returns (value, a, kappa, t) of
+    the best state, its observables in ``obs``; value -inf if none solved."""
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    tmp = np.empty(7)
+    alpha_hi, t_end = ends[0], ends[1]
+    lo, hi = 0.0, alpha_hi
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1 = _value_at(pressure, x1, ends, c, w, a_m, L_m, d_fix, key, sign, tmp)[0]
+    f2 = _value_at(pressure, x2, ends, c, w, a_m, L_m, d_fix, key, sign, tmp)[0]
+    for _ in range(END_GOLDEN):
+        if f1 >= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - g * (hi - lo)
+            f1 = _value_at(pressure, x1, ends, c, w, a_m, L_m, d_fix, key, sign, tmp)[0]
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + g * (hi - lo)
+            f2 = _value_at(pressure, x2, ends, c, w, a_m, L_m, d_fix, key, sign, tmp)[0]
+        if hi - lo <= 1e-15 * alpha_hi:
+            break
+    best = x1 if f1 >= f2 else x2
+    v, a, k = _value_at(pressure, best, ends, c, w, a_m, L_m, d_fix, key, sign, obs)
+    v0, a0, k0 = _value_at(pressure, 0.0, ends, c, w, a_m, L_m, d_fix, key, sign, tmp)
+    if v0 >= v:  # the end itself (golden section never evaluates alpha = 0)
+        obs[:] = tmp
+        return v0, a0, k0, t_end
+    return v, a, k, stretch_at(best, t_end, w)

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from .branch_end import end_extremum
 from .branches import DEL_NS, PIN_NS, admissible, observe
 from .extremum import BRENT_MAXITER, BRENT_RTOL, BRENT_XTOL, E_OK, ROOT_TOL, extremum
 from .jit import jit
@@ -214,6 +215,19 @@ def extrema(pressure, pin, dl, kappa_dc, c, w, a_m, L_m, d_fix, a_on, summary, e
             # the row itself is better: the search could not re-solve an end of its bracket (the
             # end of a no-slip delamination branch, a fold); the extremum is that row
             loc, obs = locs[i], out[:, i].copy()
+        n_l = locs.size
+        if stage == 2 and code == DEL_NS and n_l >= 2 and i >= n_l - 2 and out[1, n_l - 1] == 0.0:
+            # the bracket reaches the branch's own end, solved at alpha = 0 (.branch_end): between it
+            # and the row before, states in t do not resolve (t - t_end ~ alpha^2), so the extremum
+            # there is searched in alpha
+            ends = (out[1, n_l - 2], xs[n_l - 1], locs[n_l - 1], out[2, n_l - 1], locs[n_l - 2],
+                    out[2, n_l - 2])
+            obs_e = np.empty(7)
+            v_e, a_e, k_e, t_e = end_extremum(pressure, ends, c, w, a_m, L_m, d_fix, key, sign, obs_e)
+            # kept only when better beyond the states' rounding: at the bracket's other end it meets
+            # the search's own root, which locates a flat extremum better than values can
+            if v_e > sign * obs[key] + ROOT_TOL * (1.0 + abs(v_e)):
+                loc, obs = a_e, obs_e
         if stage == 1 and i == locs.size - 1 and dl[1].size > 0:
             # the best row is the onset, where the branch has a kink: the extremum may lie on
             # either side of it, between the onset and the first delamination row as well
