@@ -1175,25 +1175,45 @@ def _check_compressive(c, mc, m):
     contact force of every making-contact state (the end of loading included) must be compressive.
     A tensile one means the free membrane is more concave at its apex than the substrate (its apex
     curvature p / (1 - lambda_c^-6) below -1/rs, a stricter bound than the large-stretch p > -1/rs):
-    contact would not start at the apex, outside the model."""
-    # a state solved to 1e-10 carries a force error of ~1e-10 of the forces about it: at a contact radius
-    # of ~1e-6 (the first rows of a dense grid) a compressive force of ~1e-12 came out -2e-10, and 1001
-    # rows raised what 200 did not; a tensile branch is tensile well above that (|f| grows like a^2)
-    floor = -1e-8 * abs(m.f)
-    bad = [s for s in mc[1:] if not s.f > floor or s is m and not s.f > 0.0]
-    if not bad:
+    contact would not start at the apex, outside the model.
+
+    The sign is decided by proof, not by a floor on the rows' f: while making contact (alpha = 0, the
+    edge on the substrate, tangent to it) the global balance of a state is f = pi a^2 (p + T1+ / rs)
+    exactly (``kernels.shot_from_edge``: sin(theta_a) = -a/rs), so f > 0 if and only if
+    q = p + T1+ / rs > 0, with the edge tension T1+ from the state's own stretches. As a -> 0, q tends
+    to the free apex's p + (1 - lambda_c^-6) / rs (the apex-curvature condition). A state is tensile
+    when q < 0 beyond the error of its terms (``Q_TOL`` of |p| + |T1+| / rs: the stretches carry ~1e-8);
+    the row's f itself is not used for that (its last Newton step is taken on the Jacobian, with an
+    absolute error of ~1e-10 of the O(p) terms: f = -1.2e-10 at a = 1.3e-6, where pi a^2 q = +6e-12).
+    The end of loading (solved to 1e-12) must have f > 0 itself."""
+    crv = c.crv
+
+    def q(st):
+        t = K.tensions(st.l1p, st.l2a)[0]
+        return st.p + crv * t, Q_TOL * (abs(st.p) + crv * abs(t))
+    fr = c.free
+    q0 = fr.p + crv * (1.0 - fr.lc ** -6)
+    apex = q0 < -Q_TOL * (abs(fr.p) + crv)
+    bad = [s for s in mc[1:] if (lambda v: v[0] < -v[1])(q(s))]
+    if not m.f > 0.0:
+        bad = [m] + bad
+    if not (apex or bad):
         return
-    crv = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
+    show = bad[0] if bad else m
+    crv_s = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
     where = "pressure p" if c.control == "displacement" else "gap d"
     raise DomainError("the adhesionless contact force is tensile while making contact (the exact "
                       "membrane's apex is more concave than the substrate, so contact would not start "
                       "at the apex)",
-                      f"f = {m.f:.6g} at the end of loading (a_max = {c.a_max:.6g}), f = {bad[0].f:.6g} "
-                      f"at a = {bad[0].a:.6g}; it must be > 0 (the free apex curvature must exceed "
-                      f"-1/rs = {crv:.6g})",
+                      f"f = {m.f:.6g} at the end of loading (a_max = {c.a_max:.6g}), f = {show.f:.6g} "
+                      f"at a = {show.a:.6g}, free apex p + (1 - lambda_c^-6)/rs = {q0:.6g}; it must be > 0 "
+                      f"(the free apex curvature must exceed -1/rs = {crv_s:.6g})",
                       f"raise the {where}, or lambda0 = {c.lambda0:g}",
                       {"control": c.control, "slip": c.slip, "rs": c.rs, "lambda0": c.lambda0,
                        **({"p": c.p} if c.control == "displacement" else {"d": c.d})})
+
+
+Q_TOL = 1e-7  # relative error of p + T1+/rs's terms (stretches to ~1e-8, T1+ to ~4e-8) in ``_check_compressive``
 
 
 def _row(st, delta):
