@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import adhfit
+from adhfit.errors import ConvergenceError, DomainError
 from adhfit.exact import kernels as K
 from adhfit.exact.history import exact_history
 
@@ -52,3 +53,44 @@ def test_compressive_at_every_grid(name):
     assert q.min() > 1e-3 * abs(sc["p"])
     assert res.summary["f_max"] > 0.0
     _same_on_every_grid(sc)
+
+
+# 3: seed 11, pressure control, frictionless, flat punch: pinning continued in p stalled at alpha = pi/2 -
+# 1.1e-5 (a ConvergenceError at 200 rows, and on every grid for the second scene): the contact region's
+# tension T1- = T1+ cos(alpha) falls to 0 there (slack), with G ~ 7.7 < w ~ 8.7
+SLACK = {
+    "a": {"control": "pressure", "slip": "frictionless", "d": 0.6391910314157798, "w": 8.667611079474714,
+          "rs": math.inf, "a_max": 0.3628276458970798, "lambda0": 1.2220547858031294},
+    "b": {"control": "pressure", "slip": "frictionless", "d": 0.49753020186477803, "w": 8.845695061650245,
+          "rs": math.inf, "a_max": 0.25537208750441964, "lambda0": 1.1863795606145033},
+}
+
+
+@pytest.mark.parametrize("name", sorted(SLACK))
+def test_frictionless_pinning_ends_slack_below_w(name):
+    """A DomainError (the slack end) on every grid. Independent of the history's code: pinning states
+    solved here on the branch parameterized by the contact stretch (alpha and p unknown, the clamp and the
+    gap d as residuals, the contact edge where the loading left it), at lambda_c - 1 = 1e-4, 1e-5, 1e-6:
+    alpha within 2e-6 of pi/2 at the last, the contact tension T1- ~ 6e-6 (slack in the limit), Case I at
+    the clamp, and G below w by more than 0.9 with a rise of < 1e-2 over the last two decades."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading
+    from adhfit.exact.stages import Stage
+    from adhfit.exact.state import Config
+    sc = SLACK[name]
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="slack"):
+            exact_history(**sc, points=n)
+    c = prepare(sc["control"], sc["slip"], None, sc["d"], sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = Stage(cfg, "frictionless", {"rho_a": m.rho_a}, ("alpha", "p"), ("clamp", "d"), {"d": sc["d"]}, "lc")
+    guess, gs = [0.5 * math.pi - 1.6e-4, -1.0], []
+    for x in (1e-4, 1e-5, 1e-6):
+        s = st.solve(1.0 + x, guess)
+        assert abs(s.theta_end) < 0.5 * math.pi and 0.0 < 0.5 * math.pi - s.alpha < 2.0 * x
+        assert 0.0 < K.tensions(s.l1m, s.l2a)[0] < 7.0 * x  # 1 - lambda_c^-6 ~ 6 (lambda_c - 1)
+        gs.append(s.G)
+        guess = [0.5 * math.pi - 0.1 * (0.5 * math.pi - s.alpha), s.p]
+    assert max(gs) < sc["w"] - 0.9 and abs(gs[-1] - gs[0]) < 1e-2

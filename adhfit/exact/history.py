@@ -603,15 +603,8 @@ def _bracket_in_control(c, m, prev):
         xs.append(ctl.x(st))
         h *= 1.5
     last = good
-    if c.slip == "frictionless" and last.alpha > 0.5 * math.pi - 1e-5:
-        t = min(K.tensions(last.l1m, last.l2a))
-        raise DomainError(f"the exact pinning branch (frictionless) {_END_WORDS['slack']} as alpha -> pi/2 "
-                          f"(T1- = T1+ cos(alpha)), before G reaches w = {c.w:g}",
-                          f"the branch stalls at alpha = {last.alpha:.10g} (pi/2 - {0.5 * math.pi - last.alpha:.2g}), "
-                          f"least edge tension {t:.3g}, G = {last.G:.6g} < w",
-                          "lower w, or change the loading end",
-                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
-                           "a_max": c.a_max})
+    if c.slip == "frictionless" and last.alpha > 0.5 * math.pi - SLACK_NEAR:
+        _slack_end(cfg, c, ctl, last)  # raises where the branch's own states show the end below w
     if c.crv > 0.0 and last.a * c.crv > 1.0 - 1e-4:
         raise DomainError(f"the exact pinning branch ({c.slip}) carries the contact edge to the sphere's "
                           f"equator (a = rs) before G reaches w = {c.w:g}: wrapping past it is outside the "
@@ -624,6 +617,78 @@ def _bracket_in_control(c, m, prev):
     raise ConvergenceError("exact pinning: G does not reach w before the pinning branch (continued in "
                            "the control variable) stalls",
                            {"w": c.w, "alpha": last.alpha, "G": last.G, "lc": last.lc, "lambda0": c.lambda0})
+
+
+SLACK_NEAR = 1e-3  # a frictionless pinning continuation stalled this close to alpha = pi/2 is followed to its end
+SLACK_LAST = 1e-10  # ... in the contact stretch, down to lambda_c - 1 = this (T1- ~ 6e-10)
+SLACK_GAP = 1e-6  # ... or to pi/2 - alpha = this (Newton's difference step in alpha is 1.6e-7)
+SLACK_STATES = 6  # ... on at least this many states
+SLACK_STEP = 0.5  # ... on steps of lambda_c - 1 by this factor (0.25 from pi/2 - 1.3e-5 did not solve)
+
+
+def _slack_end(cfg, c, ctl, last):
+    """Frictionless pinning continued in the control stalled at ``last`` near alpha = pi/2 with G < w: the
+    edge's balance T1- = T1+ cos(alpha) takes the contact region's tension to 0 as alpha -> pi/2 (its
+    stretch lambda_c -> 1: slack, outside a membrane model), where the continuation in the control meets
+    a singular Jacobian (seen at pi/2 - 1.1e-5, seed 11). Followed on the branch parameterized by the
+    contact stretch itself (unknowns alpha, and p under pressure control, as ``_control_fold``) from
+    ``last`` to lambda_c - 1 = ``SLACK_LAST`` on geometric steps: when every state solves in Case I, alpha
+    rises toward pi/2, G stays below w and its rise shrinks geometrically (the rest of it bounded by the
+    last step's, summed as a geometric series, twice), G does not reach w before the branch ends slack:
+    raised as a DomainError. Returns when not shown."""
+    name = ctl.unknowns[0]  # lc (frictionless)
+    if c.control == "displacement":
+        st = Stage(cfg, ctl.edge, {**ctl.fixed, name: last.lc}, ("alpha",), ("clamp",), {}, name)
+    else:
+        fixed = {k: v for k, v in ctl.fixed.items() if k != "p"}
+        st = Stage(cfg, ctl.edge, {**fixed, name: last.lc}, ("alpha", "p"), ("clamp", "d"), {"d": c.d}, name)
+    def step(seq, r):
+        # cos(alpha) = T1-/T1+ with T1- ~ 6 (lambda_c - 1): pi/2 - alpha (and p) linear in lambda_c - 1
+        # along the branch's end; a guess at the last alpha put T1+ far off and the free membrane's shot
+        # failed
+        prev = seq[-1]
+        guess = [0.5 * math.pi - (0.5 * math.pi - prev.alpha) * r]
+        if len(st.unknowns) > 1:
+            guess.append(prev.p if len(seq) < 2 else prev.p + (prev.p - seq[-2].p) * (r - 1.0) / (
+                1.0 - (seq[-2].lc - 1.0) / (prev.lc - 1.0)))
+        seq.append(st.solve(1.0 + (prev.lc - 1.0) * r, guess))
+
+    down, up = [last], [last]
+    try:
+        # toward the end down to pi/2 - alpha = SLACK_GAP (Newton's difference step in alpha, 1.6e-7, must
+        # not cross pi/2: T1+ = T1- / cos(alpha) is undefined beyond) or lambda_c - 1 = SLACK_LAST ...
+        while len(down) < 60 and down[-1].lc - 1.0 > SLACK_LAST and 0.5 * math.pi - down[-1].alpha > SLACK_GAP:
+            step(down, SLACK_STEP)
+        # ... and back from it (a stall closer to pi/2 than that) until there are SLACK_STATES states
+        while len(down) + len(up) - 1 < SLACK_STATES:
+            step(up, 1.0 / SLACK_STEP)
+    except ConvergenceError:
+        return
+    seq = up[::-1] + down[1:]
+    al = [q.alpha for q in seq]
+    gs = [q.G for q in seq]
+    if not all(a0 < a1 < 0.5 * math.pi for a0, a1 in zip(al, al[1:])):
+        return
+    if any(_outside(c, q) not in (None, "slack") for q in seq) or not max(gs) < c.w:
+        return
+    steps = np.diff(gs)
+    ratio = max(abs(steps[-1] / steps[-2]) if steps[-2] != 0.0 else 0.0,
+                abs(steps[-2] / steps[-3]) if steps[-3] != 0.0 else 0.0)
+    if not ratio < 0.9:
+        return
+    top = gs[-1] + 2.0 * abs(steps[-1]) * ratio / (1.0 - ratio)  # twice the geometric series' rest
+    if not top < c.w:
+        return
+    end = seq[-1]
+    t = min(K.tensions(end.l1m, end.l2a))
+    raise DomainError(f"the exact pinning branch (frictionless) {_END_WORDS['slack']} as alpha -> pi/2 "
+                      f"(T1- = T1+ cos(alpha)), before G reaches w = {c.w:g}",
+                      f"followed in the contact stretch to lambda_c - 1 = {end.lc - 1.0:.2g} (alpha = pi/2 - "
+                      f"{0.5 * math.pi - end.alpha:.2g}, least edge tension {t:.3g}): G = {end.G:.8g} < w, at most "
+                      f"{top:.8g} at the slack end (its rise shrinking by {ratio:.3g} a step)",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max})
 
 
 def _control_fold(cfg, c, ctl, last, start):
