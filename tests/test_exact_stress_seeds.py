@@ -94,3 +94,94 @@ def test_frictionless_pinning_ends_slack_below_w(name):
         gs.append(s.G)
         guess = [0.5 * math.pi - 0.1 * (0.5 * math.pi - s.alpha), s.p]
     assert max(gs) < sc["w"] - 0.9 and abs(gs[-1] - gs[0]) < 1e-2
+
+
+# 4b: pressure control, frictionless: at 1001 rows only the pinning rows' small first steps in alpha took the
+# branch that presses on (p rising to 1.21 above the loading end's 0.99, lc to 4.06) and stalled near vertical
+# at the clamp (alpha = 0.366): "Newton line search did not converge"; the onset (alpha = 0.900) lies on the
+# branch that retracts, which 10-200 rows follow
+PRESSES_ON = {"control": "pressure", "slip": "frictionless", "d": 0.13931713060061957, "w": 0.5109398294217656,
+              "rs": 0.21226385610254273, "a_max": 0.18360772105325168, "lambda0": 1.3397743889314204}
+
+
+def test_pinning_rows_follow_the_retracting_branch_on_1001_rows():
+    """Independent: the 1001-row pinning rows retract (p at or below the loading end's, G rising to w)
+    and lie on the 200-row history's pinning path (p against alpha, interpolated); the summary agrees on
+    every grid."""
+    sc = PRESSES_ON
+    r1, r2 = exact_history(**sc, points=200), exact_history(**sc, points=1001)
+    c1, c2 = r1.columns, r2.columns
+    pin2 = c2["stage"] == "pinning"
+    p_end = c2["p"][np.flatnonzero(c2["stage"] == "making_contact")[-1]]
+    assert np.all(c2["p"][pin2] <= p_end + 1e-12) and np.all(c2["G"][pin2] <= sc["w"] * (1 + 1e-9))
+    assert np.all(np.diff(c2["G"][pin2]) > 0)
+    pin1 = c1["stage"] == "pinning"
+    a1, p1 = c1["alpha"][pin1], c1["p"][pin1]
+    from scipy.interpolate import CubicSpline
+    inside = (c2["alpha"][pin2] >= 0.1) & (c2["alpha"][pin2] <= a1.max())  # (p is steep in alpha near 0)
+    spline = CubicSpline(a1, p1)
+    assert np.max(np.abs(spline(c2["alpha"][pin2][inside]) - c2["p"][pin2][inside])) < 1e-4  # the other branch is 1 away
+    _same_on_every_grid(sc)
+
+
+# 4c: displacement control, no slip, weak adhesion: the onset at alpha = 0.049 lies near the no-slip branch's
+# end (alpha = 0); on 10 and 11 rows Newton on the end equations from the onset lost its line search
+NEAR_END = {"control": "displacement", "slip": "no-slip", "p": 0.4975077728354589, "w": 0.0010840928104376567,
+            "rs": 2.860838911140139, "a_max": 0.704434603294333, "lambda0": 1.5045346537864834}
+
+
+def test_no_slip_branch_end_on_few_rows():
+    """Independent: the branch end on 10 and 11 rows is the 1001-row one (its own march, other steps) to
+    1e-8; it has alpha = 0 and G = w (the end's two conditions), below the onset's contact radius."""
+    sc = NEAR_END
+    ref = exact_history(**sc, points=1001)
+    for n in (10, 11):
+        h = exact_history(**sc, points=n)
+        end = h.inputs["delamination_ends_at_a"]
+        assert end == pytest.approx(ref.inputs["delamination_ends_at_a"], abs=1e-8)
+        dl = [s for s, st in zip(h.states, h.columns["stage"]) if st == "delamination"]
+        last = min(dl, key=lambda s: s.a)
+        assert abs(last.alpha) < 1e-10 and last.G == pytest.approx(sc["w"], rel=1e-9)
+        assert last.a == pytest.approx(end, abs=1e-12) and end < h.summary["onset"]["a"]
+    _same_on_every_grid(sc)
+
+
+# 2: seed 7, displacement control, no slip: pinning continued in d stalled at a fold of d (alpha = 0.202, G =
+# 0.227 < w = 1.097); past the fold G rises (the fold check wanted it falling) and its first probe, 1.9e-3 in
+# lambda1+ past it, failed to solve: a ConvergenceError on every grid
+FOLD_NO_SLIP = {"control": "displacement", "slip": "no-slip", "p": -0.11728594120516367, "w": 1.0971977836637328,
+                "rs": 0.19255787881367523, "a_max": 0.1700321586950153, "lambda0": 1.0849927077844557}
+
+
+def test_pinning_fold_in_d_then_alpha_zero_is_a_domain_error():
+    """A DomainError on every grid, its locator the same. Independent of the history's code: the whole
+    pinning branch marched here in lambda1+ from the end of loading (alpha = 0 there; steps of 1e-3, then
+    2e-5 near the fold): d rises to a maximum equal to the locator (to 1e-7), then falls, and alpha comes
+    back to 0 (the membrane tangent to the sphere at the pinned edge) with G < w everywhere on the way."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, march
+    from adhfit.exact.stages import Stage
+    from adhfit.exact.state import Config
+    sc = FOLD_NO_SLIP
+    locs = []
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="retracts the control at most to d") as err:
+            exact_history(**sc, points=n)
+        locs.append(err.value.context["locator"] if hasattr(err.value, "context") else
+                    float(str(err.value).split("at most to d = ")[1].split()[0]))
+    assert max(locs) - min(locs) < 1e-9
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("alpha",), ("clamp",), {}, "l1p")
+    coarse = list(m.l1p - 1e-3 * np.arange(1, int((m.l1p - 0.861) / 1e-3)))
+    fine = list(np.arange(coarse[-1] - 2e-5, 0.857, -2e-5))
+    sts = march(st, coarse + fine, [1e-3], stop_ok=True)
+    k = next(i for i, s in enumerate(sts) if s.alpha < 0.0)
+    on = sts[:k]
+    d = np.array([s.d for s in on])
+    i = int(np.argmax(d))
+    assert 0 < i < k - 1 and abs(d[i] - locs[-1]) < 1e-7
+    assert all(s.G < sc["w"] for s in sts[:k + 1]) and all(s.alpha > 0.0 for s in on)
+    assert d[-1] < d[i] - 1e-3  # d falls past the fold before alpha reaches 0

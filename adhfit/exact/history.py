@@ -418,8 +418,16 @@ def _pinning(cfg, c, m):
         return [on], on
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
-        rows = _rows(pin, u * on.alpha, pin.x(m), c)
-        if not _presses_on(c, m, on) and any(_presses_on(c, m, s) for s in rows):
+        try:
+            rows, failed = _rows(pin, u * on.alpha, pin.x(m), c), None
+        except (ConvergenceError, DomainError) as exc:
+            # (seen on 1001 rows: the small steps took the branch that presses on, p rising to 1.21 above
+            # the loading end's 0.99, and stalled near vertical at the clamp at alpha = 0.366, where 200
+            # rows and the onset (alpha = 0.900) follow the one that retracts)
+            rows, failed = None, exc
+        if rows is None and _presses_on(c, m, on):
+            raise failed
+        if rows is None or not _presses_on(c, m, on) and any(_presses_on(c, m, s) for s in rows):
             # the rows' small first steps in alpha took the branch that presses on, the bracket's long step
             # the one that retracts (the onset's): two branches leave the end of loading with alpha > 0
             # (``_alpha_starts_elsewhere``). The history retracts: its rows are marched in alpha back from
@@ -427,6 +435,8 @@ def _pinning(cfg, c, m):
             # delta = 0.329 above delta_max = 0.277 and G = 1.014 w, then the onset at delta = 0.221)
             back = march(pin, list(u[::-1] * on.alpha), pin.x(on), stop_ok=True)
             if len(back) != len(u) or any(_presses_on(c, m, s) or not s.G <= c.w for s in back):
+                if failed is not None:
+                    raise failed
                 raise ConvergenceError("exact pinning: rows on the onset's branch", {"w": c.w, "alpha": on.alpha})
             rows = back[::-1]
         c.pin_parts = [(pin, [m] + rows + [on])]
@@ -714,25 +724,14 @@ def _control_fold(cfg, c, ctl, last, start):
         mid = fx.solve(x0, fx.x(last))
     except ConvergenceError:
         return
-    h = 1e-3 * (1.0 + abs(x0))
-    sts = {x0: mid}
-    for _ in range(12):  # widen until both sides retract the control less than the middle
-        for side in (-1.0, 1.0):
-            xs = sorted(sts)
-            near = xs[0] if side < 0 else xs[-1]
-            v = near + side * h
-            try:
-                sts[v] = fx.solve(v, fx.x(sts[near]))
-            except ConvergenceError:
-                return
-        xs = sorted(sts)
-        vals = [sgn * val(sts[x]) for x in xs]
-        k = int(np.argmax(vals))
-        if 0 < k < len(xs) - 1:
-            break
-        h *= 2.0
-    else:
+    sts = _fold_bracket(fx, mid, x0, val, sgn, 1e-3 * (1.0 + abs(x0)))
+    if sts is None:
+        # (seed 7: the first step of 1.9e-3 in lambda1+ past the fold, onto states with alpha < 0, failed
+        # from the fold's unknowns; on steps of 1.9e-4 each side solves)
+        sts = _fold_bracket(fx, mid, x0, val, sgn, 1e-4 * (1.0 + abs(x0)))
+    if sts is None:
         return
+    xs = sorted(sts)
     states = [sts[x] for x in xs]
     fold = _extremum(fx, states, val, -sgn, scale=xs[-1] - xs[0])
     if not fold.G < c.w or not all(st.G < c.w for st in states) or abs(fold.theta_end) >= 0.5 * math.pi:
@@ -742,18 +741,100 @@ def _control_fold(cfg, c, ctl, last, start):
     # past the fold (the side the continuation did not reach) G falls: it does not reach w there either
     k = int(np.argmax([sgn * val(st) for st in states]))
     ahead = states[k + 1:] if float(getattr(start, name)) < xs[k] else states[:k][::-1]
-    if not ahead or not ahead[-1].G < fold.G:
+    if not ahead:
         return
     vname = "d" if c.control == "displacement" else "p"
+    how = "G falling past it"
+    if not ahead[-1].G < fold.G:
+        # G rises past the fold: shown not to reach w there only where that side of the branch ends first,
+        # at alpha = 0 (the membrane tangent to the substrate at the pinned edge; alpha < 0 would enter it)
+        end = _fold_side_to_alpha_zero(fx, c, fold, ahead[-1])
+        if end is None:
+            return
+        how = (f"past it the branch returns ({vname} going back) to alpha = 0 at {vname} = {val(end):.8g}, G < w "
+               f"on the way and G = {end.G:.6g} there (the membrane tangent to the substrate at the pinned "
+               "edge; beyond, it would enter it)")
     raise DomainError(f"the exact pinning branch ({c.slip}) retracts the control at most to {vname} = "
                       f"{val(fold):.10g} (alpha = {fold.alpha:.8g}, G = {fold.G:.6g}), before G reaches w = "
                       f"{c.w:g}: no pinned state beyond it, and the contact edge does not delaminate there "
                       "(the membrane would come off dynamically, outside the quasi-static model)",
                       f"the control's extremum along the branch parameterized by {name}, between solved "
-                      "states either side retracting it less, G falling past it",
+                      f"states either side retracting it less; {how}",
                       "lower w, or change the loading end",
                       {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
                        "a_max": c.a_max, "locator": val(fold)})
+
+
+def _fold_bracket(fx, mid, x0, val, sgn, h):
+    """States of ``fx`` about ``mid`` (at ``x0``) on steps starting at ``h`` and doubling, widened until
+    both sides retract the control (sgn * val) less than a state between them: {parameter: state}, or
+    None when a step fails or 12 widenings do not bracket it."""
+    sts = {x0: mid}
+    for _ in range(12):
+        for side in (-1.0, 1.0):
+            xs = sorted(sts)
+            near = xs[0] if side < 0 else xs[-1]
+            v = near + side * h
+            try:
+                sts[v] = fx.solve(v, fx.x(sts[near]))
+            except ConvergenceError:
+                return None
+        xs = sorted(sts)
+        vals = [sgn * val(sts[x]) for x in xs]
+        k = int(np.argmax(vals))
+        if 0 < k < len(xs) - 1:
+            return sts
+        h *= 2.0
+    return None
+
+
+def _fold_side_to_alpha_zero(fx, c, fold, beyond):
+    """Past a fold of the control on pinning (``_control_fold``, the branch ``fx`` parameterized by the
+    edge's other unknown), on the side of the solved state ``beyond``: march from it away from the fold on
+    steps of ``FOLD_STEP`` (each failed step split) while alpha > 0 and G < w, and locate alpha = 0 between
+    the last state with alpha > 0 and the first with alpha < 0 (regula falsi, each state solved from the
+    nearer, to |alpha| < 1e-12 or the parameter to 1e-14). Returns the end state (every state on the way
+    with G < w, in Case I and inside the model), or None when that is not shown."""
+    par = lambda st: float(getattr(st, fx.param))  # noqa: E731
+    sgn = math.copysign(1.0, par(beyond) - par(fold))
+    h = FOLD_STEP * (1.0 + abs(par(fold)))
+    values = [par(beyond) + sgn * h * j for j in range(1, FOLD_STEPS + 1)]
+    try:
+        sts = march(fx, values, fx.x(beyond), stop_ok=True, start=(par(beyond), beyond), deep=12)
+    except ConvergenceError:
+        return None
+    lo = beyond
+    for st in sts:
+        if not st.G < c.w or abs(st.theta_end) >= 0.5 * math.pi:
+            return None
+        if st.alpha < 0.0:
+            hi = st
+            break
+        if _outside(c, st) is not None:
+            return None
+        lo = st
+    else:
+        return None
+    try:
+        for _ in range(100):
+            if abs(par(hi) - par(lo)) <= 1e-14 * (1.0 + abs(par(lo))) or 0.0 <= lo.alpha < 1e-12:
+                break
+            t = min(max(lo.alpha / (lo.alpha - hi.alpha), 0.05), 0.95)
+            v = par(lo) + t * (par(hi) - par(lo))
+            st = fx.solve(v, fx.x(lo if t < 0.5 else hi))
+            if st.alpha >= 0.0:
+                lo = st
+            else:
+                hi = st
+    except ConvergenceError:
+        return None
+    if not lo.G < c.w or _outside(c, lo) is not None or not abs(lo.alpha) < 1e-8:
+        return None
+    return lo
+
+
+FOLD_STEP = 2.5e-4  # steps of ``_fold_side_to_alpha_zero`` in the edge's other unknown (relative to 1 + |it|)
+FOLD_STEPS = 400  # ... at most this many
 
 
 _END_WORDS = {
@@ -832,10 +913,21 @@ def _delamination(cfg, c, m, on):
         # (an onset at alpha < 0, reached by pinning continued in the control, has no branch from it)
         last = states[-1] if states else on
         x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
-        end = branch_end(cfg, c.control, m, c.w, c.p, c.d).solve(0.0, x, tol=EXTREMUM_TOL)
-        off = lambda st: not (st.rho_a <= last.rho_a and st.a <= on.a * (1.0 + 1e-12))  # noqa: E731
+        off = lambda st: st is None or not (st.rho_a <= last.rho_a and st.a <= on.a * (1.0 + 1e-12))  # noqa: E731
+        try:
+            end = branch_end(cfg, c.control, m, c.w, c.p, c.d).solve(0.0, x, tol=EXTREMUM_TOL)
+        except ConvergenceError:
+            end = None  # (seen on 10 rows: Newton from the onset, alpha = 0.049, lost its line search)
         if off(end) and past is not None:  # else bracketed between the last row and the next (alpha < 0)
             end = _alpha_zero(stage, last, past) or end
+        if off(end):
+            # retried: the branch marched from the last state on short steps in rho_a until alpha < 0,
+            # the end bracketed between the states either side (``_alpha_zero``)
+            end = _end_by_march(stage, last, on) or end
+        if end is None:
+            raise ConvergenceError("exact delamination (no-slip): the branch end (alpha = 0) from the last "
+                                   f"state (a = {last.a:.6g}, alpha = {last.alpha:.4g}) and on short steps "
+                                   "toward it", {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max})
         if off(end):
             # another state of the end equations (seen: a = 0.2405 beyond the onset's 0.2369, solved
             # from the onset on 10 rows), not this branch's end
@@ -864,6 +956,26 @@ def _fine_grid(v0, values, h):
         keep.append(len(out) - 1)
         prev = float(v)
     return [float(x) for x in out], keep
+
+
+def _end_by_march(stage, last, on):
+    """The no-slip branch end (alpha = 0) past the delamination state ``last`` (alpha >= 0): the branch
+    marched from it on steps of DEL_STEP / 4 of the onset's rho_a (each failed step split) until a state
+    has alpha < 0, then bracketed between it and the state before (``_alpha_zero``); None when the march
+    stops first or the bracket fails."""
+    h = 0.25 * DEL_STEP * on.rho_a
+    k = max(1, int(math.ceil(last.rho_a / h)))
+    values = [last.rho_a - h * j for j in range(1, k) if last.rho_a - h * j > 0.0]
+    try:
+        sts = march(stage, values, stage.x(last), stop_ok=True, start=(last.rho_a, last), deep=12)
+    except ConvergenceError:
+        return None
+    prev = last
+    for st in sts:
+        if st.alpha < 0.0:
+            return _alpha_zero(stage, prev, st)
+        prev = st
+    return None
 
 
 def _alpha_zero(stage, good, past):
