@@ -185,3 +185,41 @@ def test_pinning_fold_in_d_then_alpha_zero_is_a_domain_error():
     assert 0 < i < k - 1 and abs(d[i] - locs[-1]) < 1e-7
     assert all(s.G < sc["w"] for s in sts[:k + 1]) and all(s.alpha > 0.0 for s in on)
     assert d[-1] < d[i] - 1e-3  # d falls past the fold before alpha reaches 0
+
+
+# 1: seed 7, displacement control, no slip, p = -0.78: the pinning branch that retracts d from the end of
+# loading has alpha < 0 at once (the free membrane beside the pinned edge turned into the sphere); it was
+# continued in d through such states to an "onset" at alpha = -0.042, from which no delamination branch
+# exists: a ConvergenceError on every grid. (Two seed-24 scenes whose pinning rows dipped to alpha = -0.015
+# and -0.007 before rising are DomainErrors now for the same reason.)
+ENTERS = {"control": "displacement", "slip": "no-slip", "p": -0.782996481377277, "w": 0.047905513575745774,
+          "rs": 0.2829169838283269, "a_max": 0.2368757732048399, "lambda0": 1.5758284915566447}
+
+
+def test_no_slip_pinning_entering_the_substrate_is_a_domain_error():
+    """A DomainError on every grid. Independent of the history's code: pinning states solved here in d
+    (unknowns lambda1+ and alpha, the contact field frozen at the end of loading) a little either side of
+    the end of loading: retracting (d above d_m) alpha < 0, pressing on (d below) alpha > 0, alpha
+    changing sign at d_m like (d - d_m): no admissible pinned state retracts the control."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading
+    from adhfit.exact.stages import Stage
+    from adhfit.exact.state import Config
+    sc = ENTERS
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="into the substrate"):
+            exact_history(**sc, points=n)
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("l1p", "alpha"), ("clamp", "d"),
+               {"d": m.d}, "d")
+    alphas = {}
+    for h in (-1e-3, -1e-4, 1e-4, 1e-3):
+        s = st.solve(m.d + h, [m.l1p, 0.0])
+        assert abs(s.d - (m.d + h)) < 1e-9 and abs(s.theta_end) < 0.5 * math.pi
+        alphas[h] = s.alpha
+    assert alphas[1e-4] < 0.0 and alphas[1e-3] < alphas[1e-4]
+    assert alphas[-1e-4] > 0.0 and alphas[-1e-3] > alphas[-1e-4]
+    assert alphas[1e-3] / alphas[1e-4] == pytest.approx(10.0, rel=0.1)

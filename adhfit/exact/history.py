@@ -564,6 +564,13 @@ def _outside(c, st) -> str | None:
     return None if t > 0.0 else "slack"
 
 
+def _enters(c, st) -> str | None:
+    """"enters" when the no-slip pinning state ``st`` has alpha < 0: the free membrane beside the pinned
+    edge turned below the substrate's tangent, i.e. into the substrate (the contact edge would advance,
+    outside the pinning model; as delamination's branch end, docs/numerics.md B5); else None."""
+    return "enters" if c.slip == "no-slip" and st.alpha < 0.0 else None
+
+
 def _bracket_in_control(c, m, prev):
     """The alpha march of pinning stopped at ``prev`` before G reached w: continue the branch in the
     control variable (``_control_stage``) until G >= w (returns the bracket as ``_bracket``), or prove
@@ -591,7 +598,7 @@ def _bracket_in_control(c, m, prev):
             st = ctl.solve(v, _predict(v, vs[-3:], xs[-3:], xs[-1]))
             if abs(st.theta_end - good.theta_end) > 0.1 or abs(st.alpha - good.alpha) > 0.1:
                 raise ConvergenceError("a step onto another branch")  # as the alpha march's guard
-            why = _outside(c, st)
+            why = _outside(c, st) or _enters(c, st)
         except PastVertical:
             why = "vertical"
         except ConvergenceError:
@@ -842,7 +849,9 @@ _END_WORDS = {
     "slack": "has a line tension at the contact edge fall to 0 (the membrane going slack, or into "
              "compression, where it would wrinkle: outside a membrane model)",
     "equator": "carries the contact edge to the sphere's equator (a = rs: wrapping past it is outside "
-               "the model)"}
+               "the model)",
+    "enters": "turns the membrane beside the pinned edge into the substrate (alpha < 0 beyond: the contact "
+              "edge would advance, outside the pinning model)"}
 
 
 def _control_end(ctl, c, good, v_good, v_bad, why):
@@ -854,7 +863,7 @@ def _control_end(ctl, c, good, v_good, v_bad, why):
         mid = 0.5 * (lo + hi)
         try:
             st = ctl.solve(mid, ctl.x(good))
-            bad = _outside(c, st)
+            bad = _outside(c, st) or _enters(c, st)
         except PastVertical:
             bad = "vertical"
         except ConvergenceError:
@@ -866,7 +875,10 @@ def _control_end(ctl, c, good, v_good, v_bad, why):
         else:
             return
     name = "d" if c.control == "displacement" else "p"
-    _pinning_end(c, name, lo, good, _END_WORDS[why], f"alpha = {good.alpha:.8g}, a = {good.a:.6g}")
+    state = f"alpha = {good.alpha:.8g}, a = {good.a:.6g}"
+    if why == "enters" and good.alpha == 0.0 and good.G == 0.0:
+        state = f"the end of loading itself, a = {good.a:.6g}: retracting the control from it, alpha < 0 at once"
+    _pinning_end(c, name, lo, good, _END_WORDS[why], state)
 
 
 def _pinning_end(c, name: str, lo: float, good, what: str, state: str):
