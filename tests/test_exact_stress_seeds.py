@@ -196,21 +196,15 @@ ENTERS = {"control": "displacement", "slip": "no-slip", "p": -0.782996481377277,
           "rs": 0.2829169838283269, "a_max": 0.2368757732048399, "lambda0": 1.5758284915566447}
 
 
-def test_no_slip_pinning_entering_the_substrate_is_a_domain_error():
-    """A DomainError on every grid. Independent of the history's code: pinning states solved here in d
-    (unknowns lambda1+ and alpha, the contact field frozen at the end of loading) a little either side of
-    the end of loading: retracting (d above d_m) alpha < 0, pressing on (d below) alpha > 0, alpha
-    changing sign at d_m like (d - d_m): no admissible pinned state retracts the control."""
+def retracting_alpha_signs(sc):
+    """Independent of the history's code: no-slip pinning states solved in d (unknowns lambda1+ and alpha,
+    the contact field frozen at the end of loading) at d_m + h, h = +-1e-4, +-1e-3: {h: alpha}."""
     from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading
     from adhfit.exact.stages import Stage
     from adhfit.exact.state import Config
-    sc = ENTERS
-    for n in GRIDS:
-        with pytest.raises(DomainError, match="into the substrate"):
-            exact_history(**sc, points=n)
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc.get("a_max"),
+                sc.get("delta_max"), None, 50, 8)
     cfg = Config(c.lambda0, c.crv, c.n)
     _, m = _loading(cfg, c)
     st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("l1p", "alpha"), ("clamp", "d"),
@@ -220,6 +214,19 @@ def test_no_slip_pinning_entering_the_substrate_is_a_domain_error():
         s = st.solve(m.d + h, [m.l1p, 0.0])
         assert abs(s.d - (m.d + h)) < 1e-9 and abs(s.theta_end) < 0.5 * math.pi
         alphas[h] = s.alpha
+    return alphas
+
+
+def test_no_slip_pinning_entering_the_substrate_is_a_domain_error():
+    """A DomainError on every grid. Independent: pinning states a little either side of the end of
+    loading (``retracting_alpha_signs``): retracting (d above d_m) alpha < 0, pressing on (d below)
+    alpha > 0, alpha changing sign at d_m like (d - d_m): no admissible pinned state retracts the
+    control."""
+    sc = ENTERS
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="into the substrate"):
+            exact_history(**sc, points=n)
+    alphas = retracting_alpha_signs(sc)
     assert alphas[1e-4] < 0.0 and alphas[1e-3] < alphas[1e-4]
     assert alphas[-1e-4] > 0.0 and alphas[-1e-3] > alphas[-1e-4]
     assert alphas[1e-3] / alphas[1e-4] == pytest.approx(10.0, rel=0.1)
