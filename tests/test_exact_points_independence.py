@@ -156,7 +156,9 @@ def test_summary_extrema_agree_with_an_independent_location(scene):
 #: continuation that found the onset, and the history passed through pinning states with alpha down to
 #: -0.015 first: the membrane beside the pinned edge turned into the substrate (inadmissible, as the
 #: no-slip delamination branch's end at alpha = 0). Retracting d from the end of loading gives alpha < 0 at
-#: once: a DomainError now (the seed-24 stress run; tests/test_exact_stress_seeds.py, seed 7's like scene).
+#: once: the branch that presses on is the history (docs/contracts.md A2), and it turns past vertical at the
+#: clamp at alpha = 0.107, G = 0.108 < w: a DomainError now (tests/test_exact_stress_seeds.py: seed 7's
+#: like scene, whose pressing branch reaches w).
 STEEP_CONTROL_PINNING = dict(control="displacement", slip="no-slip", p=-0.9212140191887281, w=6.845748455078082,
                              rs=0.07604898370037898, a_max=0.06722282506017598, lambda0=1.5567744192733814)
 
@@ -165,7 +167,7 @@ def test_pinning_rows_in_the_control_follow_a_steep_branch():
     from adhfit.errors import DomainError
     from tests.test_exact_stress_seeds import retracting_alpha_signs
     for n in (10, 50, 200):
-        with pytest.raises(DomainError, match="into the substrate"):
+        with pytest.raises(DomainError, match="turns past vertical at the clamp"):
             H.exact_history(**STEEP_CONTROL_PINNING, points=n)
     # independent: pinning states solved in d either side of the end of loading: alpha < 0 retracting
     alphas = retracting_alpha_signs(STEEP_CONTROL_PINNING)

@@ -190,8 +190,10 @@ def test_pinning_fold_in_d_then_alpha_zero_is_a_domain_error():
 # 1: seed 7, displacement control, no slip, p = -0.78: the pinning branch that retracts d from the end of
 # loading has alpha < 0 at once (the free membrane beside the pinned edge turned into the sphere); it was
 # continued in d through such states to an "onset" at alpha = -0.042, from which no delamination branch
-# exists: a ConvergenceError on every grid. (Two seed-24 scenes whose pinning rows dipped to alpha = -0.015
-# and -0.007 before rising are DomainErrors now for the same reason.)
+# exists: a ConvergenceError on every grid. No admissible pinned state retracts d: the branch that presses on
+# is the history (docs/contracts.md A2: the end of loading is the turning point). (Two seed-24 scenes whose
+# pinning rows dipped to alpha = -0.015 and -0.007 before rising now take that branch too, which turns past
+# vertical at the clamp before G reaches w: DomainErrors.)
 ENTERS = {"control": "displacement", "slip": "no-slip", "p": -0.782996481377277, "w": 0.047905513575745774,
           "rs": 0.2829169838283269, "a_max": 0.2368757732048399, "lambda0": 1.5758284915566447}
 
@@ -217,16 +219,22 @@ def retracting_alpha_signs(sc):
     return alphas
 
 
-def test_no_slip_pinning_entering_the_substrate_is_a_domain_error():
-    """A DomainError on every grid. Independent: pinning states a little either side of the end of
-    loading (``retracting_alpha_signs``): retracting (d above d_m) alpha < 0, pressing on (d below)
-    alpha > 0, alpha changing sign at d_m like (d - d_m): no admissible pinned state retracts the
-    control."""
+def test_no_slip_pinning_that_would_enter_the_substrate_presses_on():
+    """Independent: pinning states solved in d either side of the end of loading
+    (``retracting_alpha_signs``): retracting (d above d_m) alpha < 0, pressing on (d below) alpha > 0,
+    alpha changing sign at d_m like (d - d_m): no admissible pinned state retracts the control. The
+    history is the branch that presses on: every pinning row has alpha >= 0 and d <= d_m, G rises to w,
+    the turning point is the end of loading; the summary is the same on every grid."""
     sc = ENTERS
-    for n in GRIDS:
-        with pytest.raises(DomainError, match="into the substrate"):
-            exact_history(**sc, points=n)
     alphas = retracting_alpha_signs(sc)
     assert alphas[1e-4] < 0.0 and alphas[1e-3] < alphas[1e-4]
     assert alphas[-1e-4] > 0.0 and alphas[-1e-3] > alphas[-1e-4]
     assert alphas[1e-3] / alphas[1e-4] == pytest.approx(10.0, rel=0.1)
+    h = exact_history(**sc, points=200)
+    col = h.columns
+    pin = col["stage"] == "pinning"
+    mk = np.flatnonzero(col["stage"] == "making_contact")[-1]
+    assert np.all(col["alpha"][pin] >= 0.0) and np.all(col["d"][pin] <= col["d"][mk] + 1e-12)
+    assert np.all(np.diff(col["G"][pin]) > 0) and col["G"][pin][-1] == pytest.approx(sc["w"], rel=1e-9)
+    assert h.summary["turning_point"]["f"] == h.summary["f_max"]
+    _same_on_every_grid(sc)

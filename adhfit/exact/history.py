@@ -283,8 +283,9 @@ def _bracket(pin, c, m, top):
         return _bracket_in_control(c, m, m)
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
-    if _presses_on(c, m, prev) or (st is not None and _presses_on(c, m, st)):
-        # the alpha march took a branch that presses on: the one that retracts, where there is one
+    if (_presses_on(c, m, prev) or (st is not None and _presses_on(c, m, st))) and not _enters_at_once(c, m):
+        # the alpha march took a branch that presses on: the one that retracts, where there is one (none
+        # where its states have alpha < 0 at once, no slip: ``_enters_at_once``)
         try:
             return _bracket_in_control(c, m, m)
         except DomainError:
@@ -297,6 +298,27 @@ def _bracket(pin, c, m, top):
         _pinning_case_one_end(pin, c, prev, prev_a)
         return _bracket_in_control(c, m, prev)
     return prev, prev_a, st, alpha, None
+
+
+def _enters_at_once(c, m) -> bool:
+    """No slip: whether the pinning branch that retracts the control from the end of loading ``m`` has
+    alpha < 0 at once (the membrane beside the pinned edge turned into the substrate: ``_enters``), shown
+    by the state a small retraction away (1e-6 of the control, Newton from ``m`` at alpha = 0) and one ten
+    times further, both with alpha < 0, the second ~10 times the first (alpha ~ the retraction). Then no
+    admissible pinned state retracts the control: the branch that presses on is the history (docs/
+    contracts.md A2: the end of loading is the turning point), as where none is found."""
+    if c.slip != "no-slip":
+        return False
+    ctl = _control_stage(Config(c.lambda0, c.crv, c.n), c, m)
+    val = _control_value(c)
+    sgn = 1.0 if c.control == "displacement" else -1.0
+    got = []
+    for h in (1e-6, 1e-5):
+        try:
+            got.append(ctl.solve(val(m) + sgn * h * (1.0 + abs(val(m))), ctl.x(m)[:1] + [0.0]).alpha)
+        except ConvergenceError:
+            return False
+    return got[0] < 0.0 and 5.0 < got[1] / got[0] < 20.0
 
 
 def _presses_on(c, m, st) -> bool:
