@@ -897,10 +897,7 @@ def _control_end(ctl, c, good, v_good, v_bad, why):
         else:
             return
     name = "d" if c.control == "displacement" else "p"
-    state = f"alpha = {good.alpha:.8g}, a = {good.a:.6g}"
-    if why == "enters" and good.alpha == 0.0 and good.G == 0.0:
-        state = f"the end of loading itself, a = {good.a:.6g}: retracting the control from it, alpha < 0 at once"
-    _pinning_end(c, name, lo, good, _END_WORDS[why], state)
+    _pinning_end(c, name, lo, good, _END_WORDS[why], f"alpha = {good.alpha:.8g}, a = {good.a:.6g}")
 
 
 def _pinning_end(c, name: str, lo: float, good, what: str, state: str):
