@@ -1395,14 +1395,15 @@ def _check_compressive(c, mc, m):
     absolute error of ~1e-10 of the O(p) terms: f = -1.2e-10 at a = 1.3e-6, where pi a^2 q = +6e-12).
     The end of loading (solved to 1e-12) must have f > 0 itself."""
     crv = c.crv
-
-    def q(st):
-        t = K.tensions(st.l1p, st.l2a)[0]
-        return st.p + crv * t, Q_TOL * (abs(st.p) + crv * abs(t))
     fr = c.free
     q0 = fr.p + crv * (1.0 - fr.lc ** -6)
     apex = q0 < -Q_TOL * (abs(fr.p) + crv)
-    bad = [s for s in mc[1:] if (lambda v: v[0] < -v[1])(q(s))]
+    bad = []
+    if len(mc) > 1:  # T1+ = l1/l2 - (l1 l2)^-3 (``kernels.tensions``), vectorized over the rows
+        p, l1, l2 = np.array([(s.p, s.l1p, s.l2a) for s in mc[1:]], dtype=float).T
+        t = l1 / l2 - 1.0 / (l1 * l2) ** 3
+        q = p + crv * t
+        bad = [mc[1 + i] for i in np.flatnonzero(q < -Q_TOL * (np.abs(p) + crv * np.abs(t)))]
     if not m.f > 0.0:
         bad = [m] + bad
     if not (apex or bad):
