@@ -12,7 +12,6 @@ derivative (numpy), then that state solved to 1e-13.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest

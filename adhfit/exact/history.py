@@ -671,16 +671,18 @@ def _slack_end(cfg, c, ctl, last):
     stretch lambda_c -> 1: slack, outside a membrane model), where the continuation in the control meets
     a singular Jacobian (seen at pi/2 - 1.1e-5, seed 11). Followed on the branch parameterized by the
     contact stretch itself (unknowns alpha, and p under pressure control, as ``_control_fold``) from
-    ``last`` to lambda_c - 1 = ``SLACK_LAST`` on geometric steps: when every state solves in Case I, alpha
-    rises toward pi/2, G stays below w and its rise shrinks geometrically (the rest of it bounded by the
-    last step's, summed as a geometric series, twice), G does not reach w before the branch ends slack:
-    raised as a DomainError. Returns when not shown."""
+    ``last`` toward lambda_c = 1 on geometric steps (to ``SLACK_LAST``, or pi/2 - alpha = ``SLACK_GAP``;
+    back from ``last`` too where that leaves fewer than ``SLACK_STATES`` states): when every state solves
+    in Case I, alpha rises toward pi/2, G stays below w and its rise shrinks geometrically (the rest of
+    it bounded by the last step's, summed as a geometric series, twice), G does not reach w before the
+    branch ends slack: raised as a DomainError. Returns when not shown."""
     name = ctl.unknowns[0]  # lc (frictionless)
     if c.control == "displacement":
         st = Stage(cfg, ctl.edge, {**ctl.fixed, name: last.lc}, ("alpha",), ("clamp",), {}, name)
     else:
         fixed = {k: v for k, v in ctl.fixed.items() if k != "p"}
         st = Stage(cfg, ctl.edge, {**fixed, name: last.lc}, ("alpha", "p"), ("clamp", "d"), {"d": c.d}, name)
+
     def step(seq, r):
         # cos(alpha) = T1-/T1+ with T1- ~ 6 (lambda_c - 1): pi/2 - alpha (and p) linear in lambda_c - 1
         # along the branch's end; a guess at the last alpha put T1+ far off and the free membrane's shot
