@@ -87,12 +87,16 @@ def test_exact_summary_does_not_depend_on_points(scene):
 def test_exact_f_min_is_the_least_force_of_the_history():
     # audit: f_min reported above a pinning row's force (the search looked at delamination only).  The audit's
     # scene (w = 1.717) is now a proven end (its pinning branch turns past vertical at the clamp at G = 0.4245,
-    # before G reaches w); at w = 0.4 the same scene has a history whose least force is a pinning row's
+    # before G reaches w). At w = 0.4 the same scene's history was the branch retracting d through pinning
+    # states with alpha < 0 (the membrane inside the substrate); it is now the branch that presses on, whose
+    # force rises from the end of loading: the least force is a pinning row's in a seed-7 stress scene
     sc = dict(control="displacement", slip="no-slip", p=-0.7699527810979117, w=1.7168078585792619,
               rs=0.35115934066785875, a_max=0.2800773190109454, lambda0=1.937789535932881)
     with pytest.raises(DomainError, match="turns past vertical at the clamp"):
         adhfit.simulate(**sc, membrane="exact")
-    r = adhfit.simulate(**dict(sc, w=0.4), membrane="exact")
+    r = adhfit.simulate(control="displacement", slip="no-slip", p=0.6326762076381514, w=7.829597237075857,
+                        rs=3.460309376048547, a_max=0.1440978301907819, lambda0=1.3502499338914362,
+                        membrane="exact")
     f = r.frame
     pinning, delamination = f.f[f.stage == "pinning"].min(), f.f[f.stage == "delamination"].min()
     assert pinning < delamination  # the case the audit found: the least force lies in pinning

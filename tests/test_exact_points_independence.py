@@ -12,7 +12,6 @@ derivative (numpy), then that state solved to 1e-13.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -152,35 +151,26 @@ def test_summary_extrema_agree_with_an_independent_location(scene):
 
 #: no-slip pinning continued in the control from the end of loading: alpha rises from 0.4 to 2.8 while d
 #: moves by 0.05 (near a fold in d); the rows' march, evenly spaced in d, ran Newton off to alpha + 2 pi k
-#: (2.4e6) and failed: one of the two ConvergenceErrors of the stress run. The rows now start from the
-#: continuation that found the onset.
+#: (2.4e6) and failed: one of the two ConvergenceErrors of the stress run. The rows then started from the
+#: continuation that found the onset, and the history passed through pinning states with alpha down to
+#: -0.015 first: the membrane beside the pinned edge turned into the substrate (inadmissible, as the
+#: no-slip delamination branch's end at alpha = 0). Retracting d from the end of loading gives alpha < 0 at
+#: once: the branch that presses on is the history (docs/contracts.md A2), and it turns past vertical at the
+#: clamp at alpha = 0.107, G = 0.108 < w: a DomainError now (tests/test_exact_stress_seeds.py: seed 7's
+#: like scene, whose pressing branch reaches w).
 STEEP_CONTROL_PINNING = dict(control="displacement", slip="no-slip", p=-0.9212140191887281, w=6.845748455078082,
                              rs=0.07604898370037898, a_max=0.06722282506017598, lambda0=1.5567744192733814)
 
 
 def test_pinning_rows_in_the_control_follow_a_steep_branch():
-    from tests.test_domain_exact_ends import arclength_pinning
-    hs = {n: H.exact_history(**STEEP_CONTROL_PINNING, points=n) for n in (10, 50, 200)}
-    for n, h in hs.items():
-        alpha = h.columns["alpha"]
-        assert np.all(np.abs(alpha) < math.pi), n  # no state shifted by 2 pi k
-        for k, v in _values(h.summary).items():
-            assert v == pytest.approx(_values(hs[200].summary)[k], abs=1e-8, rel=0), (n, k)
-    h = hs[200]
-    stage, G = h.columns["stage"], h.columns["G"]
-    i_on = int(np.flatnonzero(stage == "pinning")[-1])
-    # the independent branch (pseudo-arclength in (l1p, alpha)) reaches G = w at the onset's contact angle
-    # (started on the engine's branch, at its first pinning row past alpha = 0.05: from the end of loading
-    # itself two branches leave, and the continuation took the one pressing on)
-    st0 = next(s for s, g in zip(h.states, stage) if g == "pinning" and s.alpha > 0.05)
-    c, path = arclength_pinning(STEEP_CONTROL_PINNING, ds=0.01, steps=3000, y0=[st0.l1p, st0.alpha])
-    assert path[-1].G >= c.w
-    i = len(path) - 1
-    t = (c.w - path[i - 1].G) / (path[i].G - path[i - 1].G)
-    assert path[i - 1].alpha + t * (path[i].alpha - path[i - 1].alpha) == pytest.approx(h.columns["alpha"][i_on],
-                                                                                           abs=1e-4)
-    assert path[i - 1].d + t * (path[i].d - path[i - 1].d) == pytest.approx(h.columns["d"][i_on], abs=1e-4)
-    assert G[i_on] == pytest.approx(c.w, abs=1e-9)
+    from adhfit.errors import DomainError
+    from tests.test_exact_stress_seeds import retracting_alpha_signs
+    for n in (10, 50, 200):
+        with pytest.raises(DomainError, match="turns past vertical at the clamp"):
+            H.exact_history(**STEEP_CONTROL_PINNING, points=n)
+    # independent: pinning states solved in d either side of the end of loading: alpha < 0 retracting
+    alphas = retracting_alpha_signs(STEEP_CONTROL_PINNING)
+    assert alphas[1e-4] < 0.0 and alphas[1e-3] < alphas[1e-4] and alphas[-1e-4] > 0.0
 
 
 #: no-slip pinning continued in d stalls at alpha = 1.370 with G = 0.318 < w = 3.80: the other

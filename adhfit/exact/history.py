@@ -283,8 +283,9 @@ def _bracket(pin, c, m, top):
         return _bracket_in_control(c, m, m)
     prev, prev_a, st, alpha = pin.bracket(pin.x(m), m.G, c.w, top)
     prev = m if prev is None else prev
-    if _presses_on(c, m, prev) or (st is not None and _presses_on(c, m, st)):
-        # the alpha march took a branch that presses on: the one that retracts, where there is one
+    if (_presses_on(c, m, prev) or (st is not None and _presses_on(c, m, st))) and not _enters_at_once(c, m):
+        # the alpha march took a branch that presses on: the one that retracts, where there is one (none
+        # where its states have alpha < 0 at once, no slip: ``_enters_at_once``)
         try:
             return _bracket_in_control(c, m, m)
         except DomainError:
@@ -297,6 +298,27 @@ def _bracket(pin, c, m, top):
         _pinning_case_one_end(pin, c, prev, prev_a)
         return _bracket_in_control(c, m, prev)
     return prev, prev_a, st, alpha, None
+
+
+def _enters_at_once(c, m) -> bool:
+    """No slip: whether the pinning branch that retracts the control from the end of loading ``m`` has
+    alpha < 0 at once (the membrane beside the pinned edge turned into the substrate: ``_enters``), shown
+    by the state a small retraction away (1e-6 of the control, Newton from ``m`` at alpha = 0) and one ten
+    times further, both with alpha < 0, the second ~10 times the first (alpha ~ the retraction). Then no
+    admissible pinned state retracts the control: the branch that presses on is the history (docs/
+    contracts.md A2: the end of loading is the turning point), as where none is found."""
+    if c.slip != "no-slip":
+        return False
+    ctl = _control_stage(Config(c.lambda0, c.crv, c.n), c, m)
+    val = _control_value(c)
+    sgn = 1.0 if c.control == "displacement" else -1.0
+    got = []
+    for h in (1e-6, 1e-5):
+        try:
+            got.append(ctl.solve(val(m) + sgn * h * (1.0 + abs(val(m))), ctl.x(m)[:1] + [0.0]).alpha)
+        except ConvergenceError:
+            return False
+    return got[0] < 0.0 and 5.0 < got[1] / got[0] < 20.0
 
 
 def _presses_on(c, m, st) -> bool:
@@ -418,8 +440,16 @@ def _pinning(cfg, c, m):
         return [on], on
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
-        rows = _rows(pin, u * on.alpha, pin.x(m), c)
-        if not _presses_on(c, m, on) and any(_presses_on(c, m, s) for s in rows):
+        try:
+            rows, failed = _rows(pin, u * on.alpha, pin.x(m), c), None
+        except (ConvergenceError, DomainError) as exc:
+            # (seen on 1001 rows: the small steps took the branch that presses on, p rising to 1.21 above
+            # the loading end's 0.99, and stalled near vertical at the clamp at alpha = 0.366, where 200
+            # rows and the onset (alpha = 0.900) follow the one that retracts)
+            rows, failed = None, exc
+        if rows is None and _presses_on(c, m, on):
+            raise failed
+        if rows is None or not _presses_on(c, m, on) and any(_presses_on(c, m, s) for s in rows):
             # the rows' small first steps in alpha took the branch that presses on, the bracket's long step
             # the one that retracts (the onset's): two branches leave the end of loading with alpha > 0
             # (``_alpha_starts_elsewhere``). The history retracts: its rows are marched in alpha back from
@@ -427,6 +457,8 @@ def _pinning(cfg, c, m):
             # delta = 0.329 above delta_max = 0.277 and G = 1.014 w, then the onset at delta = 0.221)
             back = march(pin, list(u[::-1] * on.alpha), pin.x(on), stop_ok=True)
             if len(back) != len(u) or any(_presses_on(c, m, s) or not s.G <= c.w for s in back):
+                if failed is not None:
+                    raise failed
                 raise ConvergenceError("exact pinning: rows on the onset's branch", {"w": c.w, "alpha": on.alpha})
             rows = back[::-1]
         c.pin_parts = [(pin, [m] + rows + [on])]
@@ -554,6 +586,13 @@ def _outside(c, st) -> str | None:
     return None if t > 0.0 else "slack"
 
 
+def _enters(c, st) -> str | None:
+    """"enters" when the no-slip pinning state ``st`` has alpha < 0: the free membrane beside the pinned
+    edge turned below the substrate's tangent, i.e. into the substrate (the contact edge would advance,
+    outside the pinning model; as delamination's branch end, docs/numerics.md B5); else None."""
+    return "enters" if c.slip == "no-slip" and st.alpha < 0.0 else None
+
+
 def _bracket_in_control(c, m, prev):
     """The alpha march of pinning stopped at ``prev`` before G reached w: continue the branch in the
     control variable (``_control_stage``) until G >= w (returns the bracket as ``_bracket``), or prove
@@ -581,7 +620,7 @@ def _bracket_in_control(c, m, prev):
             st = ctl.solve(v, _predict(v, vs[-3:], xs[-3:], xs[-1]))
             if abs(st.theta_end - good.theta_end) > 0.1 or abs(st.alpha - good.alpha) > 0.1:
                 raise ConvergenceError("a step onto another branch")  # as the alpha march's guard
-            why = _outside(c, st)
+            why = _outside(c, st) or _enters(c, st)
         except PastVertical:
             why = "vertical"
         except ConvergenceError:
@@ -603,15 +642,8 @@ def _bracket_in_control(c, m, prev):
         xs.append(ctl.x(st))
         h *= 1.5
     last = good
-    if c.slip == "frictionless" and last.alpha > 0.5 * math.pi - 1e-5:
-        t = min(K.tensions(last.l1m, last.l2a))
-        raise DomainError(f"the exact pinning branch (frictionless) {_END_WORDS['slack']} as alpha -> pi/2 "
-                          f"(T1- = T1+ cos(alpha)), before G reaches w = {c.w:g}",
-                          f"the branch stalls at alpha = {last.alpha:.10g} (pi/2 - {0.5 * math.pi - last.alpha:.2g}), "
-                          f"least edge tension {t:.3g}, G = {last.G:.6g} < w",
-                          "lower w, or change the loading end",
-                          {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
-                           "a_max": c.a_max})
+    if c.slip == "frictionless" and last.alpha > 0.5 * math.pi - SLACK_NEAR:
+        _slack_end(cfg, c, ctl, last)  # raises where the branch's own states show the end below w
     if c.crv > 0.0 and last.a * c.crv > 1.0 - 1e-4:
         raise DomainError(f"the exact pinning branch ({c.slip}) carries the contact edge to the sphere's "
                           f"equator (a = rs) before G reaches w = {c.w:g}: wrapping past it is outside the "
@@ -624,6 +656,80 @@ def _bracket_in_control(c, m, prev):
     raise ConvergenceError("exact pinning: G does not reach w before the pinning branch (continued in "
                            "the control variable) stalls",
                            {"w": c.w, "alpha": last.alpha, "G": last.G, "lc": last.lc, "lambda0": c.lambda0})
+
+
+SLACK_NEAR = 1e-3  # a frictionless pinning continuation stalled this close to alpha = pi/2 is followed to its end
+SLACK_LAST = 1e-10  # ... in the contact stretch, down to lambda_c - 1 = this (T1- ~ 6e-10)
+SLACK_GAP = 1e-6  # ... or to pi/2 - alpha = this (Newton's difference step in alpha is 1.6e-7)
+SLACK_STATES = 6  # ... on at least this many states
+SLACK_STEP = 0.5  # ... on steps of lambda_c - 1 by this factor (0.25 from pi/2 - 1.3e-5 did not solve)
+
+
+def _slack_end(cfg, c, ctl, last):
+    """Frictionless pinning continued in the control stalled at ``last`` near alpha = pi/2 with G < w: the
+    edge's balance T1- = T1+ cos(alpha) takes the contact region's tension to 0 as alpha -> pi/2 (its
+    stretch lambda_c -> 1: slack, outside a membrane model), where the continuation in the control meets
+    a singular Jacobian (seen at pi/2 - 1.1e-5, seed 11). Followed on the branch parameterized by the
+    contact stretch itself (unknowns alpha, and p under pressure control, as ``_control_fold``) from
+    ``last`` toward lambda_c = 1 on geometric steps (to ``SLACK_LAST``, or pi/2 - alpha = ``SLACK_GAP``;
+    back from ``last`` too where that leaves fewer than ``SLACK_STATES`` states): when every state solves
+    in Case I, alpha rises toward pi/2, G stays below w and its rise shrinks geometrically (the rest of
+    it bounded by the last step's, summed as a geometric series, twice), G does not reach w before the
+    branch ends slack: raised as a DomainError. Returns when not shown."""
+    name = ctl.unknowns[0]  # lc (frictionless)
+    if c.control == "displacement":
+        st = Stage(cfg, ctl.edge, {**ctl.fixed, name: last.lc}, ("alpha",), ("clamp",), {}, name)
+    else:
+        fixed = {k: v for k, v in ctl.fixed.items() if k != "p"}
+        st = Stage(cfg, ctl.edge, {**fixed, name: last.lc}, ("alpha", "p"), ("clamp", "d"), {"d": c.d}, name)
+
+    def step(seq, r):
+        # cos(alpha) = T1-/T1+ with T1- ~ 6 (lambda_c - 1): pi/2 - alpha (and p) linear in lambda_c - 1
+        # along the branch's end; a guess at the last alpha put T1+ far off and the free membrane's shot
+        # failed
+        prev = seq[-1]
+        guess = [0.5 * math.pi - (0.5 * math.pi - prev.alpha) * r]
+        if len(st.unknowns) > 1:
+            guess.append(prev.p if len(seq) < 2 else prev.p + (prev.p - seq[-2].p) * (r - 1.0) / (
+                1.0 - (seq[-2].lc - 1.0) / (prev.lc - 1.0)))
+        seq.append(st.solve(1.0 + (prev.lc - 1.0) * r, guess))
+
+    down, up = [last], [last]
+    try:
+        # toward the end down to pi/2 - alpha = SLACK_GAP (Newton's difference step in alpha, 1.6e-7, must
+        # not cross pi/2: T1+ = T1- / cos(alpha) is undefined beyond) or lambda_c - 1 = SLACK_LAST ...
+        while len(down) < 60 and down[-1].lc - 1.0 > SLACK_LAST and 0.5 * math.pi - down[-1].alpha > SLACK_GAP:
+            step(down, SLACK_STEP)
+        # ... and back from it (a stall closer to pi/2 than that) until there are SLACK_STATES states
+        while len(down) + len(up) - 1 < SLACK_STATES:
+            step(up, 1.0 / SLACK_STEP)
+    except ConvergenceError:
+        return
+    seq = up[::-1] + down[1:]
+    al = [q.alpha for q in seq]
+    gs = [q.G for q in seq]
+    if not all(a0 < a1 < 0.5 * math.pi for a0, a1 in zip(al, al[1:])):
+        return
+    if any(_outside(c, q) not in (None, "slack") for q in seq) or not max(gs) < c.w:
+        return
+    steps = np.diff(gs)
+    ratio = max(abs(steps[-1] / steps[-2]) if steps[-2] != 0.0 else 0.0,
+                abs(steps[-2] / steps[-3]) if steps[-3] != 0.0 else 0.0)
+    if not ratio < 0.9:
+        return
+    top = gs[-1] + 2.0 * abs(steps[-1]) * ratio / (1.0 - ratio)  # twice the geometric series' rest
+    if not top < c.w:
+        return
+    end = seq[-1]
+    t = min(K.tensions(end.l1m, end.l2a))
+    raise DomainError(f"the exact pinning branch (frictionless) {_END_WORDS['slack']} as alpha -> pi/2 "
+                      f"(T1- = T1+ cos(alpha)), before G reaches w = {c.w:g}",
+                      f"followed in the contact stretch to lambda_c - 1 = {end.lc - 1.0:.2g} (alpha = pi/2 - "
+                      f"{0.5 * math.pi - end.alpha:.2g}, least edge tension {t:.3g}): G = {end.G:.8g} < w, at most "
+                      f"{top:.8g} at the slack end (its rise shrinking by {ratio:.3g} a step)",
+                      "lower w, or change the loading end",
+                      {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
+                       "a_max": c.a_max})
 
 
 def _control_fold(cfg, c, ctl, last, start):
@@ -649,25 +755,14 @@ def _control_fold(cfg, c, ctl, last, start):
         mid = fx.solve(x0, fx.x(last))
     except ConvergenceError:
         return
-    h = 1e-3 * (1.0 + abs(x0))
-    sts = {x0: mid}
-    for _ in range(12):  # widen until both sides retract the control less than the middle
-        for side in (-1.0, 1.0):
-            xs = sorted(sts)
-            near = xs[0] if side < 0 else xs[-1]
-            v = near + side * h
-            try:
-                sts[v] = fx.solve(v, fx.x(sts[near]))
-            except ConvergenceError:
-                return
-        xs = sorted(sts)
-        vals = [sgn * val(sts[x]) for x in xs]
-        k = int(np.argmax(vals))
-        if 0 < k < len(xs) - 1:
-            break
-        h *= 2.0
-    else:
+    sts = _fold_bracket(fx, mid, x0, val, sgn, 1e-3 * (1.0 + abs(x0)))
+    if sts is None:
+        # (seed 7: the first step of 1.9e-3 in lambda1+ past the fold, onto states with alpha < 0, failed
+        # from the fold's unknowns; on steps of 1.9e-4 each side solves)
+        sts = _fold_bracket(fx, mid, x0, val, sgn, 1e-4 * (1.0 + abs(x0)))
+    if sts is None:
         return
+    xs = sorted(sts)
     states = [sts[x] for x in xs]
     fold = _extremum(fx, states, val, -sgn, scale=xs[-1] - xs[0])
     if not fold.G < c.w or not all(st.G < c.w for st in states) or abs(fold.theta_end) >= 0.5 * math.pi:
@@ -677,18 +772,100 @@ def _control_fold(cfg, c, ctl, last, start):
     # past the fold (the side the continuation did not reach) G falls: it does not reach w there either
     k = int(np.argmax([sgn * val(st) for st in states]))
     ahead = states[k + 1:] if float(getattr(start, name)) < xs[k] else states[:k][::-1]
-    if not ahead or not ahead[-1].G < fold.G:
+    if not ahead:
         return
     vname = "d" if c.control == "displacement" else "p"
+    how = "G falling past it"
+    if not ahead[-1].G < fold.G:
+        # G rises past the fold: shown not to reach w there only where that side of the branch ends first,
+        # at alpha = 0 (the membrane tangent to the substrate at the pinned edge; alpha < 0 would enter it)
+        end = _fold_side_to_alpha_zero(fx, c, fold, ahead[-1])
+        if end is None:
+            return
+        how = (f"past it the branch returns ({vname} going back) to alpha = 0 at {vname} = {val(end):.8g}, G < w "
+               f"on the way and G = {end.G:.6g} there (the membrane tangent to the substrate at the pinned "
+               "edge; beyond, it would enter it)")
     raise DomainError(f"the exact pinning branch ({c.slip}) retracts the control at most to {vname} = "
                       f"{val(fold):.10g} (alpha = {fold.alpha:.8g}, G = {fold.G:.6g}), before G reaches w = "
                       f"{c.w:g}: no pinned state beyond it, and the contact edge does not delaminate there "
                       "(the membrane would come off dynamically, outside the quasi-static model)",
                       f"the control's extremum along the branch parameterized by {name}, between solved "
-                      "states either side retracting it less, G falling past it",
+                      f"states either side retracting it less; {how}",
                       "lower w, or change the loading end",
                       {"control": c.control, "slip": c.slip, "w": c.w, "lambda0": c.lambda0,
                        "a_max": c.a_max, "locator": val(fold)})
+
+
+def _fold_bracket(fx, mid, x0, val, sgn, h):
+    """States of ``fx`` about ``mid`` (at ``x0``) on steps starting at ``h`` and doubling, widened until
+    both sides retract the control (sgn * val) less than a state between them: {parameter: state}, or
+    None when a step fails or 12 widenings do not bracket it."""
+    sts = {x0: mid}
+    for _ in range(12):
+        for side in (-1.0, 1.0):
+            xs = sorted(sts)
+            near = xs[0] if side < 0 else xs[-1]
+            v = near + side * h
+            try:
+                sts[v] = fx.solve(v, fx.x(sts[near]))
+            except ConvergenceError:
+                return None
+        xs = sorted(sts)
+        vals = [sgn * val(sts[x]) for x in xs]
+        k = int(np.argmax(vals))
+        if 0 < k < len(xs) - 1:
+            return sts
+        h *= 2.0
+    return None
+
+
+def _fold_side_to_alpha_zero(fx, c, fold, beyond):
+    """Past a fold of the control on pinning (``_control_fold``, the branch ``fx`` parameterized by the
+    edge's other unknown), on the side of the solved state ``beyond``: march from it away from the fold on
+    steps of ``FOLD_STEP`` (each failed step split) while alpha > 0 and G < w, and locate alpha = 0 between
+    the last state with alpha > 0 and the first with alpha < 0 (regula falsi, each state solved from the
+    nearer, to |alpha| < 1e-12 or the parameter to 1e-14). Returns the end state (every state on the way
+    with G < w, in Case I and inside the model), or None when that is not shown."""
+    par = lambda st: float(getattr(st, fx.param))  # noqa: E731
+    sgn = math.copysign(1.0, par(beyond) - par(fold))
+    h = FOLD_STEP * (1.0 + abs(par(fold)))
+    values = [par(beyond) + sgn * h * j for j in range(1, FOLD_STEPS + 1)]
+    try:
+        sts = march(fx, values, fx.x(beyond), stop_ok=True, start=(par(beyond), beyond), deep=12)
+    except ConvergenceError:
+        return None
+    lo = beyond
+    for st in sts:
+        if not st.G < c.w or abs(st.theta_end) >= 0.5 * math.pi:
+            return None
+        if st.alpha < 0.0:
+            hi = st
+            break
+        if _outside(c, st) is not None:
+            return None
+        lo = st
+    else:
+        return None
+    try:
+        for _ in range(100):
+            if abs(par(hi) - par(lo)) <= 1e-14 * (1.0 + abs(par(lo))) or 0.0 <= lo.alpha < 1e-12:
+                break
+            t = min(max(lo.alpha / (lo.alpha - hi.alpha), 0.05), 0.95)
+            v = par(lo) + t * (par(hi) - par(lo))
+            st = fx.solve(v, fx.x(lo if t < 0.5 else hi))
+            if st.alpha >= 0.0:
+                lo = st
+            else:
+                hi = st
+    except ConvergenceError:
+        return None
+    if not lo.G < c.w or _outside(c, lo) is not None or not abs(lo.alpha) < 1e-8:
+        return None
+    return lo
+
+
+FOLD_STEP = 2.5e-4  # steps of ``_fold_side_to_alpha_zero`` in the edge's other unknown (relative to 1 + |it|)
+FOLD_STEPS = 400  # ... at most this many
 
 
 _END_WORDS = {
@@ -696,7 +873,9 @@ _END_WORDS = {
     "slack": "has a line tension at the contact edge fall to 0 (the membrane going slack, or into "
              "compression, where it would wrinkle: outside a membrane model)",
     "equator": "carries the contact edge to the sphere's equator (a = rs: wrapping past it is outside "
-               "the model)"}
+               "the model)",
+    "enters": "turns the membrane beside the pinned edge into the substrate (alpha < 0 beyond: the contact "
+              "edge would advance, outside the pinning model)"}
 
 
 def _control_end(ctl, c, good, v_good, v_bad, why):
@@ -708,7 +887,7 @@ def _control_end(ctl, c, good, v_good, v_bad, why):
         mid = 0.5 * (lo + hi)
         try:
             st = ctl.solve(mid, ctl.x(good))
-            bad = _outside(c, st)
+            bad = _outside(c, st) or _enters(c, st)
         except PastVertical:
             bad = "vertical"
         except ConvergenceError:
@@ -767,10 +946,21 @@ def _delamination(cfg, c, m, on):
         # (an onset at alpha < 0, reached by pinning continued in the control, has no branch from it)
         last = states[-1] if states else on
         x = [last.l1p, last.rho_a] + ([last.p] if c.control == "pressure" else [])
-        end = branch_end(cfg, c.control, m, c.w, c.p, c.d).solve(0.0, x, tol=EXTREMUM_TOL)
-        off = lambda st: not (st.rho_a <= last.rho_a and st.a <= on.a * (1.0 + 1e-12))  # noqa: E731
+        off = lambda st: st is None or not (st.rho_a <= last.rho_a and st.a <= on.a * (1.0 + 1e-12))  # noqa: E731
+        try:
+            end = branch_end(cfg, c.control, m, c.w, c.p, c.d).solve(0.0, x, tol=EXTREMUM_TOL)
+        except ConvergenceError:
+            end = None  # (seen on 10 rows: Newton from the onset, alpha = 0.049, lost its line search)
         if off(end) and past is not None:  # else bracketed between the last row and the next (alpha < 0)
             end = _alpha_zero(stage, last, past) or end
+        if off(end):
+            # retried: the branch marched from the last state on short steps in rho_a until alpha < 0,
+            # the end bracketed between the states either side (``_alpha_zero``)
+            end = _end_by_march(stage, last, on) or end
+        if end is None:
+            raise ConvergenceError("exact delamination (no-slip): the branch end (alpha = 0) from the last "
+                                   f"state (a = {last.a:.6g}, alpha = {last.alpha:.4g}) and on short steps "
+                                   "toward it", {"w": c.w, "lambda0": c.lambda0, "a_max": c.a_max})
         if off(end):
             # another state of the end equations (seen: a = 0.2405 beyond the onset's 0.2369, solved
             # from the onset on 10 rows), not this branch's end
@@ -799,6 +989,26 @@ def _fine_grid(v0, values, h):
         keep.append(len(out) - 1)
         prev = float(v)
     return [float(x) for x in out], keep
+
+
+def _end_by_march(stage, last, on):
+    """The no-slip branch end (alpha = 0) past the delamination state ``last`` (alpha >= 0): the branch
+    marched from it on steps of DEL_STEP / 4 of the onset's rho_a (each failed step split) until a state
+    has alpha < 0, then bracketed between it and the state before (``_alpha_zero``); None when the march
+    stops first or the bracket fails."""
+    h = 0.25 * DEL_STEP * on.rho_a
+    k = max(1, int(math.ceil(last.rho_a / h)))
+    values = [last.rho_a - h * j for j in range(1, k) if last.rho_a - h * j > 0.0]
+    try:
+        sts = march(stage, values, stage.x(last), stop_ok=True, start=(last.rho_a, last), deep=12)
+    except ConvergenceError:
+        return None
+    prev = last
+    for st in sts:
+        if st.alpha < 0.0:
+            return _alpha_zero(stage, prev, st)
+        prev = st
+    return None
 
 
 def _alpha_zero(stage, good, past):
@@ -1175,25 +1385,46 @@ def _check_compressive(c, mc, m):
     contact force of every making-contact state (the end of loading included) must be compressive.
     A tensile one means the free membrane is more concave at its apex than the substrate (its apex
     curvature p / (1 - lambda_c^-6) below -1/rs, a stricter bound than the large-stretch p > -1/rs):
-    contact would not start at the apex, outside the model."""
-    # a state solved to 1e-10 carries a force error of ~1e-10 of the forces about it: at a contact radius
-    # of ~1e-6 (the first rows of a dense grid) a compressive force of ~1e-12 came out -2e-10, and 1001
-    # rows raised what 200 did not; a tensile branch is tensile well above that (|f| grows like a^2)
-    floor = -1e-8 * abs(m.f)
-    bad = [s for s in mc[1:] if not s.f > floor or s is m and not s.f > 0.0]
-    if not bad:
+    contact would not start at the apex, outside the model.
+
+    The sign is decided by proof, not by a floor on the rows' f: while making contact (alpha = 0, the
+    edge on the substrate, tangent to it) the global balance of a state is f = pi a^2 (p + T1+ / rs)
+    exactly (``kernels.shot_from_edge``: sin(theta_a) = -a/rs), so f > 0 if and only if
+    q = p + T1+ / rs > 0, with the edge tension T1+ from the state's own stretches. As a -> 0, q tends
+    to the free apex's p + (1 - lambda_c^-6) / rs (the apex-curvature condition). A state is tensile
+    when q < 0 beyond the error of its terms (``Q_TOL`` of |p| + |T1+| / rs: the stretches carry ~1e-8);
+    the row's f itself is not used for that (its last Newton step is taken on the Jacobian, with an
+    absolute error of ~1e-10 of the O(p) terms: f = -1.2e-10 at a = 1.3e-6, where pi a^2 q = +6e-12).
+    The end of loading (solved to 1e-12) must have f > 0 itself."""
+    crv = c.crv
+    fr = c.free
+    q0 = fr.p + crv * (1.0 - fr.lc ** -6)
+    apex = q0 < -Q_TOL * (abs(fr.p) + crv)
+    bad = []
+    if len(mc) > 1:  # T1+ = l1/l2 - (l1 l2)^-3 (``kernels.tensions``), vectorized over the rows
+        p, l1, l2 = np.array([(s.p, s.l1p, s.l2a) for s in mc[1:]], dtype=float).T
+        t = l1 / l2 - 1.0 / (l1 * l2) ** 3
+        q = p + crv * t
+        bad = [mc[1 + i] for i in np.flatnonzero(q < -Q_TOL * (np.abs(p) + crv * np.abs(t)))]
+    if not m.f > 0.0:
+        bad = [m] + bad
+    if not (apex or bad):
         return
-    crv = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
+    show = bad[0] if bad else m
+    crv_s = 0.0 if math.isinf(c.rs) else -1.0 / c.rs
     where = "pressure p" if c.control == "displacement" else "gap d"
     raise DomainError("the adhesionless contact force is tensile while making contact (the exact "
                       "membrane's apex is more concave than the substrate, so contact would not start "
                       "at the apex)",
-                      f"f = {m.f:.6g} at the end of loading (a_max = {c.a_max:.6g}), f = {bad[0].f:.6g} "
-                      f"at a = {bad[0].a:.6g}; it must be > 0 (the free apex curvature must exceed "
-                      f"-1/rs = {crv:.6g})",
+                      f"f = {m.f:.6g} at the end of loading (a_max = {c.a_max:.6g}), f = {show.f:.6g} "
+                      f"at a = {show.a:.6g}, free apex p + (1 - lambda_c^-6)/rs = {q0:.6g}; it must be > 0 "
+                      f"(the free apex curvature must exceed -1/rs = {crv_s:.6g})",
                       f"raise the {where}, or lambda0 = {c.lambda0:g}",
                       {"control": c.control, "slip": c.slip, "rs": c.rs, "lambda0": c.lambda0,
                        **({"p": c.p} if c.control == "displacement" else {"d": c.d})})
+
+
+Q_TOL = 1e-7  # relative error of p + T1+/rs's terms (stretches to ~1e-8, T1+ to ~4e-8) in ``_check_compressive``
 
 
 def _row(st, delta):

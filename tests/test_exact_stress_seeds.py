@@ -1,0 +1,241 @@
+"""Stress-seed scenes of the exact membrane (issue 24: seeds 3, 7, 11, 24), each one's fix checked
+independently of the code under test where possible (another row grid, the branch's own states, the
+analytic identity of the contact force)."""
+import math
+
+import numpy as np
+import pytest
+
+import adhfit
+from adhfit.errors import DomainError
+from adhfit.exact import kernels as K
+from adhfit.exact.history import exact_history
+
+GRIDS = (10, 11, 50, 200, 1001)
+
+
+def _summary_values(s):
+    return [s["f_max"]] + [s[k][q] for k in ("onset", "f_min", "turning_point") for q in ("f", "p", "a")]
+
+
+def _same_on_every_grid(sc, grids=GRIDS):
+    """Every grid gives a history whose summary agrees with the 1001-row one to 1e-8."""
+    ref = _summary_values(adhfit.simulate(**sc, points=1001, membrane="exact").summary)
+    for n in grids:
+        got = _summary_values(adhfit.simulate(**sc, points=n, membrane="exact").summary)
+        assert np.max(np.abs(np.subtract(got, ref))) < 1e-8, n
+
+
+# 4a: a false "tensile while making contact" DomainError at 1001 rows only: the first rows (a ~ 1e-6) had
+# f ~ -1e-10 (the absolute error of the last, Jacobian-updated Newton step), where the force is positive
+COMPRESSIVE = {
+    "sphere_p_pos": {"control": "displacement", "slip": "frictionless", "p": 0.6646232032268258,
+                     "w": 7.485110334339072, "rs": 1.030477256042499, "delta_max": 0.01501837070897856,
+                     "lambda0": 1.2000317907318199},
+    "big_sphere": {"control": "displacement", "slip": "no-slip", "p": 0.6526070675532547, "w": 5.693148666126391,
+                   "rs": 86.45105591657092, "delta_max": 0.00024086249299457173, "lambda0": 1.0731404068642771},
+    "p_neg": {"control": "displacement", "slip": "frictionless", "p": -0.3477996296038832,
+              "w": 0.0006285446688657191, "rs": 0.17595056676506596, "delta_max": 0.0037782452349012664,
+              "lambda0": 1.0583911299190005},
+}
+
+
+@pytest.mark.parametrize("name", sorted(COMPRESSIVE))
+def test_compressive_at_every_grid(name):
+    """Independent: while making contact the force is f = pi a^2 (p + T1+/rs) (alpha = 0, the edge
+    tangent to the sphere); T1+ = t1(l1+, l2) > 0 and p + T1+/rs > 0 on every row of the 1001-row
+    history, well above the error of its terms, so no state is tensile; the summary is the same on every
+    grid (10 rows to 1001)."""
+    sc = COMPRESSIVE[name]
+    res = exact_history(**sc, points=1001)
+    mc = [s for s, st in zip(res.states, res.columns["stage"]) if st == "making_contact"][1:]
+    q = np.array([s.p + K.tensions(s.l1p, s.l2a)[0] / sc["rs"] for s in mc])
+    assert q.min() > 1e-3 * abs(sc["p"])
+    assert res.summary["f_max"] > 0.0
+    _same_on_every_grid(sc)
+
+
+# 3: seed 11, pressure control, frictionless, flat punch: pinning continued in p stalled at alpha = pi/2 -
+# 1.1e-5 (a ConvergenceError at 200 rows, and on every grid for the second scene): the contact region's
+# tension T1- = T1+ cos(alpha) falls to 0 there (slack), with G ~ 7.7 < w ~ 8.7
+SLACK = {
+    "a": {"control": "pressure", "slip": "frictionless", "d": 0.6391910314157798, "w": 8.667611079474714,
+          "rs": math.inf, "a_max": 0.3628276458970798, "lambda0": 1.2220547858031294},
+    "b": {"control": "pressure", "slip": "frictionless", "d": 0.49753020186477803, "w": 8.845695061650245,
+          "rs": math.inf, "a_max": 0.25537208750441964, "lambda0": 1.1863795606145033},
+}
+
+
+@pytest.mark.parametrize("name", sorted(SLACK))
+def test_frictionless_pinning_ends_slack_below_w(name):
+    """A DomainError (the slack end) on every grid. Independent of the history's code: pinning states
+    solved here on the branch parameterized by the contact stretch (alpha and p unknown, the clamp and the
+    gap d as residuals, the contact edge where the loading left it), at lambda_c - 1 = 1e-4, 1e-5, 1e-6:
+    alpha within 2e-6 of pi/2 at the last, the contact tension T1- ~ 6e-6 (slack in the limit), Case I at
+    the clamp, and G below w by more than 0.9 with a rise of < 1e-2 over the last two decades."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading
+    from adhfit.exact.stages import Stage
+    from adhfit.exact.state import Config
+    sc = SLACK[name]
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="slack"):
+            exact_history(**sc, points=n)
+    c = prepare(sc["control"], sc["slip"], None, sc["d"], sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = Stage(cfg, "frictionless", {"rho_a": m.rho_a}, ("alpha", "p"), ("clamp", "d"), {"d": sc["d"]}, "lc")
+    guess, gs = [0.5 * math.pi - 1.6e-4, -1.0], []
+    for x in (1e-4, 1e-5, 1e-6):
+        s = st.solve(1.0 + x, guess)
+        assert abs(s.theta_end) < 0.5 * math.pi and 0.0 < 0.5 * math.pi - s.alpha < 2.0 * x
+        assert 0.0 < K.tensions(s.l1m, s.l2a)[0] < 7.0 * x  # 1 - lambda_c^-6 ~ 6 (lambda_c - 1)
+        gs.append(s.G)
+        guess = [0.5 * math.pi - 0.1 * (0.5 * math.pi - s.alpha), s.p]
+    assert max(gs) < sc["w"] - 0.9 and abs(gs[-1] - gs[0]) < 1e-2
+
+
+# 4b: pressure control, frictionless: at 1001 rows only the pinning rows' small first steps in alpha took the
+# branch that presses on (p rising to 1.21 above the loading end's 0.99, lc to 4.06) and stalled near vertical
+# at the clamp (alpha = 0.366): "Newton line search did not converge"; the onset (alpha = 0.900) lies on the
+# branch that retracts, which 10-200 rows follow
+PRESSES_ON = {"control": "pressure", "slip": "frictionless", "d": 0.13931713060061957, "w": 0.5109398294217656,
+              "rs": 0.21226385610254273, "a_max": 0.18360772105325168, "lambda0": 1.3397743889314204}
+
+
+def test_pinning_rows_follow_the_retracting_branch_on_1001_rows():
+    """Independent: the 1001-row pinning rows retract (p at or below the loading end's, G rising to w)
+    and lie on the 200-row history's pinning path (p against alpha, interpolated); the summary agrees on
+    every grid."""
+    sc = PRESSES_ON
+    r1, r2 = exact_history(**sc, points=200), exact_history(**sc, points=1001)
+    c1, c2 = r1.columns, r2.columns
+    pin2 = c2["stage"] == "pinning"
+    p_end = c2["p"][np.flatnonzero(c2["stage"] == "making_contact")[-1]]
+    assert np.all(c2["p"][pin2] <= p_end + 1e-12) and np.all(c2["G"][pin2] <= sc["w"] * (1 + 1e-9))
+    assert np.all(np.diff(c2["G"][pin2]) > 0)
+    pin1 = c1["stage"] == "pinning"
+    a1, p1 = c1["alpha"][pin1], c1["p"][pin1]
+    from scipy.interpolate import CubicSpline
+    inside = (c2["alpha"][pin2] >= 0.1) & (c2["alpha"][pin2] <= a1.max())  # (p is steep in alpha near 0)
+    spline = CubicSpline(a1, p1)
+    # (the branch that presses on lies ~1 away in p)
+    assert np.max(np.abs(spline(c2["alpha"][pin2][inside]) - c2["p"][pin2][inside])) < 1e-4
+    _same_on_every_grid(sc)
+
+
+# 4c: displacement control, no slip, weak adhesion: the onset at alpha = 0.049 lies near the no-slip branch's
+# end (alpha = 0); on 10 and 11 rows Newton on the end equations from the onset lost its line search
+NEAR_END = {"control": "displacement", "slip": "no-slip", "p": 0.4975077728354589, "w": 0.0010840928104376567,
+            "rs": 2.860838911140139, "a_max": 0.704434603294333, "lambda0": 1.5045346537864834}
+
+
+def test_no_slip_branch_end_on_few_rows():
+    """Independent: the branch end on 10 and 11 rows is the 1001-row one (its own march, other steps) to
+    1e-8; it has alpha = 0 and G = w (the end's two conditions), below the onset's contact radius."""
+    sc = NEAR_END
+    ref = exact_history(**sc, points=1001)
+    for n in (10, 11):
+        h = exact_history(**sc, points=n)
+        end = h.inputs["delamination_ends_at_a"]
+        assert end == pytest.approx(ref.inputs["delamination_ends_at_a"], abs=1e-8)
+        dl = [s for s, st in zip(h.states, h.columns["stage"]) if st == "delamination"]
+        last = min(dl, key=lambda s: s.a)
+        assert abs(last.alpha) < 1e-10 and last.G == pytest.approx(sc["w"], rel=1e-9)
+        assert last.a == pytest.approx(end, abs=1e-12) and end < h.summary["onset"]["a"]
+    _same_on_every_grid(sc)
+
+
+# 2: seed 7, displacement control, no slip: pinning continued in d stalled at a fold of d (alpha = 0.202, G =
+# 0.227 < w = 1.097); past the fold G rises (the fold check wanted it falling) and its first probe, 1.9e-3 in
+# lambda1+ past it, failed to solve: a ConvergenceError on every grid
+FOLD_NO_SLIP = {"control": "displacement", "slip": "no-slip", "p": -0.11728594120516367, "w": 1.0971977836637328,
+                "rs": 0.19255787881367523, "a_max": 0.1700321586950153, "lambda0": 1.0849927077844557}
+
+
+def test_pinning_fold_in_d_then_alpha_zero_is_a_domain_error():
+    """A DomainError on every grid, its locator the same. Independent of the history's code: the whole
+    pinning branch marched here in lambda1+ from the end of loading (alpha = 0 there; steps of 1e-3, then
+    2e-5 near the fold): d rises to a maximum equal to the locator (to 1e-7), then falls, and alpha comes
+    back to 0 (the membrane tangent to the sphere at the pinned edge) with G < w everywhere on the way."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, march
+    from adhfit.exact.stages import Stage
+    from adhfit.exact.state import Config
+    sc = FOLD_NO_SLIP
+    locs = []
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="retracts the control at most to d") as err:
+            exact_history(**sc, points=n)
+        locs.append(err.value.context["locator"] if hasattr(err.value, "context") else
+                    float(str(err.value).split("at most to d = ")[1].split()[0]))
+    assert max(locs) - min(locs) < 1e-9
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("alpha",), ("clamp",), {}, "l1p")
+    coarse = list(m.l1p - 1e-3 * np.arange(1, int((m.l1p - 0.861) / 1e-3)))
+    fine = list(np.arange(coarse[-1] - 2e-5, 0.857, -2e-5))
+    sts = march(st, coarse + fine, [1e-3], stop_ok=True)
+    k = next(i for i, s in enumerate(sts) if s.alpha < 0.0)
+    on = sts[:k]
+    d = np.array([s.d for s in on])
+    i = int(np.argmax(d))
+    assert 0 < i < k - 1 and abs(d[i] - locs[-1]) < 1e-7
+    assert all(s.G < sc["w"] for s in sts[:k + 1]) and all(s.alpha > 0.0 for s in on)
+    assert d[-1] < d[i] - 1e-3  # d falls past the fold before alpha reaches 0
+
+
+# 1: seed 7, displacement control, no slip, p = -0.78: the pinning branch that retracts d from the end of
+# loading has alpha < 0 at once (the free membrane beside the pinned edge turned into the sphere); it was
+# continued in d through such states to an "onset" at alpha = -0.042, from which no delamination branch
+# exists: a ConvergenceError on every grid. No admissible pinned state retracts d: the branch that presses on
+# is the history (docs/contracts.md A2: the end of loading is the turning point). (Two seed-24 scenes whose
+# pinning rows dipped to alpha = -0.015 and -0.007 before rising now take that branch too, which turns past
+# vertical at the clamp before G reaches w: DomainErrors.)
+ENTERS = {"control": "displacement", "slip": "no-slip", "p": -0.782996481377277, "w": 0.047905513575745774,
+          "rs": 0.2829169838283269, "a_max": 0.2368757732048399, "lambda0": 1.5758284915566447}
+
+
+def retracting_alpha_signs(sc):
+    """Independent of the history's code: no-slip pinning states solved in d (unknowns lambda1+ and alpha,
+    the contact field frozen at the end of loading) at d_m + h, h = +-1e-4, +-1e-3: {h: alpha}."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading
+    from adhfit.exact.stages import Stage
+    from adhfit.exact.state import Config
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc.get("a_max"),
+                sc.get("delta_max"), None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("l1p", "alpha"), ("clamp", "d"),
+               {"d": m.d}, "d")
+    alphas = {}
+    for h in (-1e-3, -1e-4, 1e-4, 1e-3):
+        s = st.solve(m.d + h, [m.l1p, 0.0])
+        assert abs(s.d - (m.d + h)) < 1e-9 and abs(s.theta_end) < 0.5 * math.pi
+        alphas[h] = s.alpha
+    return alphas
+
+
+def test_no_slip_pinning_that_would_enter_the_substrate_presses_on():
+    """Independent: pinning states solved in d either side of the end of loading
+    (``retracting_alpha_signs``): retracting (d above d_m) alpha < 0, pressing on (d below) alpha > 0,
+    alpha changing sign at d_m like (d - d_m): no admissible pinned state retracts the control. The
+    history is the branch that presses on: every pinning row has alpha >= 0 and d <= d_m, G rises to w,
+    the turning point is the end of loading; the summary is the same on every grid."""
+    sc = ENTERS
+    alphas = retracting_alpha_signs(sc)
+    assert alphas[1e-4] < 0.0 and alphas[1e-3] < alphas[1e-4]
+    assert alphas[-1e-4] > 0.0 and alphas[-1e-3] > alphas[-1e-4]
+    assert alphas[1e-3] / alphas[1e-4] == pytest.approx(10.0, rel=0.1)
+    h = exact_history(**sc, points=200)
+    col = h.columns
+    pin = col["stage"] == "pinning"
+    mk = np.flatnonzero(col["stage"] == "making_contact")[-1]
+    assert np.all(col["alpha"][pin] >= 0.0) and np.all(col["d"][pin] <= col["d"][mk] + 1e-12)
+    assert np.all(np.diff(col["G"][pin]) > 0) and col["G"][pin][-1] == pytest.approx(sc["w"], rel=1e-9)
+    assert h.summary["turning_point"]["f"] == h.summary["f_max"]
+    _same_on_every_grid(sc)
