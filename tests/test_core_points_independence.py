@@ -15,7 +15,7 @@ Each is held here, at every row count, to a reference that does not use the engi
   (4.8e-6): no-slip delamination under pressure control whose force minimum and turning point lie
   between the last row and the branch's own end (alpha -> 0), where the state does not solve: the
   searches kept the row, or failed. The 30-digit reference's continuation in a cannot reach that end
-  (the branch folds there), so :func:`end_reference` follows delamination in alpha instead (t from
+  (the branch folds there), so ``tests.reference.end_reference`` follows delamination in alpha instead (t from
   G = w in closed form, (a, kappa) from the reference's Newton at 30 digits) down to alpha = 0, and
   locates both extrema by the reference's Brent minimisation over the grid cells either side of the
   least grid value.
@@ -38,6 +38,7 @@ import pytest
 
 import adhfit
 from tests.reference import mp_model as M
+from tests.reference.end_reference import end_reference
 
 GRIDS = (10, 11, 50, 200, 1001)
 KEYS = ("onset", "f_min", "turning_point")
@@ -94,66 +95,6 @@ def test_frictionless_pinning_stays_on_the_branch_it_starts_on():
         assert a.max() < 0.9 * PINNING_JUMP["rs"], n
 
 
-def end_reference(d, w, rs, a_max, n_grid=40):
-    """f_max, onset, f_min and turning point of a pressure-control no-slip history whose extrema lie
-    in delamination, next to its branch end, to 30 digits (``mp_model``'s profiles and Newton).
-
-    Delamination is followed in alpha from the onset to 0: G = w fixes t = sqrt(1 + C2/a^2) as a
-    root of t^2/2 - t cos(alpha) + 1/2 - w = 0 (the one the onset is on), and (a, kappa) solve the
-    material condition (eq. 61) and the gap. Pinning (the reference's own continuation) is checked to
-    stay above the least values."""
-    with mp.workdps(M.DPS):
-        d, w, rs, a_max = map(mp.mpf, (d, w, rs, a_max))
-        h = M.history("pressure", "no-slip", d=d, w=w, rs=rs, a_max=a_max)
-        on = h.onset
-        t_on = mp.sqrt(1 + on.C2 / on.a ** 2)
-
-        def roots(al):
-            s = mp.sqrt(2 * w - mp.sin(al) ** 2)
-            return mp.cos(al) - s, mp.cos(al) + s
-
-        r = roots(on.alpha)
-        root = 0 if abs(r[0] - t_on) < abs(r[1] - t_on) else 1
-        assert abs(r[root] - t_on) < mp.mpf("1e-20")
-        cache = {}
-
-        def solve(al, guess):
-            t = roots(al)[root]
-
-            def fun(x):
-                sol = M.no_slip_profile(x[1], x[0], al, t * t - 1, rs)
-                return [sol.J0 - h.L_m - M.rho_log_ratio(x[0], a_max, rs), sol.gap - d], sol
-            return M._newton(fun, guess)
-
-        grid = [on.alpha * (1 - mp.mpf(k) / n_grid) for k in range(n_grid + 1)]
-        sols, x = [on], [on.a, on.kap]
-        for al in grid[1:]:
-            x, sol = solve(al, x)
-            sols.append(sol)
-            cache[al] = (x, sol)
-
-        def at(al):
-            near = min(cache, key=lambda g: abs(g - al))
-            x, sol = solve(al, cache[near][0])
-            cache[al] = (x, sol)
-            return sol
-
-        pin = [h.solve("pinning", on.alpha * mp.mpf(k) / 10) for k in range(10)]
-        out = {"f_max": float(h.end.f), "onset": (float(on.f), float(on.kap), float(on.a))}
-        for name, obj in (("f_min", lambda s: s.f), ("turning_point", lambda s: s.kap)):
-            vals = [obj(s) for s in sols]
-            i = min(range(len(vals)), key=lambda k: vals[k])
-            assert min(obj(s) for s in pin) > vals[i]
-            lo, hi = sorted((grid[max(i - 1, 0)], grid[min(i + 1, n_grid)]))
-
-            def fun(al, obj=obj):
-                return obj(at(al))
-            al = M._polish_min(fun, M._brent_min(fun, lo, hi, mp.mpf("1e-13")), lo, hi)
-            s = at(min([al, lo, hi], key=fun))
-            out[name] = (float(s.f), float(s.kap), float(s.a))
-        return out
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(REFERENCE))
 def test_the_stored_references_are_recomputed(name):
@@ -164,7 +105,7 @@ def test_the_stored_references_are_recomputed(name):
         got = {"f_max": float(got["f_max"]),
                **{k: tuple(float(got[k][q]) for q in ("f", "p", "a")) for k in KEYS}}
     else:
-        got = end_reference(**kw)
+        got = end_reference("pressure", None, **kw)
     assert got["f_max"] == pytest.approx(ref["f_max"], abs=1e-14)
     for k in KEYS:
         for g, r in zip(got[k], ref[k]):

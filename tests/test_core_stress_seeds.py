@@ -35,9 +35,8 @@ def test_turning_point_on_the_rows_branch(points):
 # the turning point at the no-slip delamination branch's own end (alpha = 0): the rows in t stopped
 # ~1e-7 in alpha short of it, and arccos(1 - y) gave their angles to ~sqrt(eps), so the gap of the
 # last rows jittered by 4e-10 and the turning point found on them moved by 4e-8 to 1.6e-7 in a with
-# the row count (stress seed 11). Reference: tests/test_core_seed7_points.end_reference (30 digits,
+# the row count (stress seed 11). Reference: tests/reference/end_reference.py (30 digits,
 # delamination followed in alpha to 0 by the mpmath model, Brent on the turning point), run once:
-#   PYTHONPATH=. python -c "from tests.test_core_seed7_points import end_reference, _kw; ..."
 END_TURN = {"control": "displacement", "slip": "no-slip", "p": -0.7691980581649935,
             "w": 0.00012370439688703735, "rs": 0.4331708815185013, "a_max": 0.3060316951058363,
             "lambda0": 3.14978611044507}
@@ -57,8 +56,8 @@ def test_turning_point_at_the_branch_end_matches_the_reference(points):
 
 
 def test_turning_point_reference_recomputed():
-    from tests.test_core_seed7_points import _kw, end_reference
-    got = end_reference(**_kw(END_TURN))
+    from tests.reference.end_reference import end_reference, scene_kwargs
+    got = end_reference(**scene_kwargs(END_TURN))
     assert got["f_max"] == pytest.approx(END_TURN_REF["f_max"], abs=1e-14)
     for k in ("onset", "f_min", "turning_point"):
         for g, r in zip(got[k], END_TURN_REF[k]):
