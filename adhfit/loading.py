@@ -365,7 +365,8 @@ def _raise(failures, v, info, c, pc, limit=None):
         a_end = _explicit_end(v, c, float(failures[0][2][2]))
         raise DomainError("the frictionless delamination branch leaves the model (the free membrane "
                           "would turn past vertical at the clamp)",
-                          f"its states exist only for a >= {a_end:.6g}, before detachment", "lower w or p, "
+                          f"its states leave Case I below a = {a_end:.6g}, before detachment",
+                          "lower w or p, "
                           "or a_max", info)
     # a no-slip delamination branch that ends (alpha -> 0) is a history that stops there, not "no
     # solution": a stall there is the engine's failure to finish it, never a DomainError

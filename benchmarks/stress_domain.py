@@ -238,6 +238,12 @@ def markdown(rep: dict) -> str:
                   f"{pc['over_1e-8']} scenes differ by more than 1e-8; {len(pc['outcome_flips'])} change outcome "
                   "(a history at one row count, an error at another).", ""]
         lines += [f"- {w['max_abs_diff']:.3g}: `{json.dumps(w['scene'])}`" for w in pc["worst"]]
+    dc = rep.get("domain_check")
+    if dc:
+        lines += ["", "## DomainErrors on other grids", "",
+                  f"{dc['scenes']} DomainError scenes re-run at {dc['grids']} and 1001 rows: "
+                  f"{len(dc['outcome_flips'])} are not a DomainError on every grid.", ""]
+        lines += [f"- `{json.dumps(f['scene'])}` at {f['points']} rows" for f in dc["outcome_flips"]]
     return "\n".join(lines) + "\n"
 
 
@@ -252,6 +258,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--points-check", type=int, default=0,
                     help="re-run this many solved scenes at 10, 11, 50, 200 and 1001 rows and compare summaries")
+    ap.add_argument("--domain-check", type=int, default=0,
+                    help="re-run this many DomainError scenes at 10, 11, 50, 200 and 1001 rows: each must "
+                         "be a DomainError on every grid (a second check of the claim)")
     ap.add_argument("--out", type=Path, default=RESULTS)
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
@@ -271,6 +280,14 @@ def main(argv: list[str] | None = None) -> int:
             "over_1e-8": int(sum(w > 1e-8 for w in worst)),
             "outcome_flips": [{"scene": picked[i], "points": c["flips"]} for i, c in enumerate(checks) if c["flips"]],
             "worst": [{"scene": picked[i], "max_abs_diff": worst[i]} for i in order]}
+    if args.domain_check:
+        picked = [sc for sc, o in zip(scenes, outs) if o["kind"] == "domain_error"][:args.domain_check]
+        with mp.get_context("spawn").Pool(args.workers) as pool:
+            checks = pool.map(points_check, [(sc, args.membrane) for sc in picked])
+        rep["domain_check"] = {
+            "scenes": len(picked), "grids": list(GRIDS), "reference_points": 1001,
+            "outcome_flips": [{"scene": picked[i], "points": c["flips"]} for i, c in enumerate(checks)
+                              if c["flips"]]}
     args.out.mkdir(parents=True, exist_ok=True)
     stem = f"stress_domain_{args.membrane}"
     (args.out / f"{stem}.json").write_text(json.dumps(rep, indent=1, default=str) + "\n")

@@ -42,7 +42,7 @@ def one_seed(membrane: str, seed: int, n: int, check: int, workers: int, work: P
     """Run ``stress_domain.py`` for one seed and keep the numbers the issue asks of it."""
     out = work / f"{membrane}_{seed}"
     stress_domain.main(["--membrane", membrane, "--n", str(n), "--seed", str(seed), "--points-check",
-                        str(check), "--workers", str(workers), "--out", str(out)])
+                        str(check), "--domain-check", str(check), "--workers", str(workers), "--out", str(out)])
     rep = json.loads((out / f"stress_domain_{membrane}.json").read_text())
     pc = rep.get("points_check", {})
     load = str(rep.get("machine", "")).rpartition("load ")[2] or "?"
@@ -50,6 +50,8 @@ def one_seed(membrane: str, seed: int, n: int, check: int, workers: int, work: P
             "convergence_errors": rep["convergence_errors"],
             "points_checked": pc.get("scenes", 0), "max_abs_diff": pc.get("max_abs_diff", 0.0),
             "over_1e-8": pc.get("over_1e-8", 0), "outcome_flips": pc.get("outcome_flips", []),
+            "domain_checked": rep.get("domain_check", {}).get("scenes", 0),
+            "domain_flips": rep.get("domain_check", {}).get("outcome_flips", []),
             "time_history_ms": {k: 1e3 * v for k, v in rep["time_history_s"].items()}}
 
 
@@ -60,19 +62,21 @@ def section(membrane: str, rows: list[dict], command: str) -> str:
              "load (last column; 2 cores).", "",
              "| seed | scenes | histories | DomainError | ConvergenceError | invariant violations | NaN "
              "| other exceptions | scenes off 1001 rows by > 1e-8 (of checked) | largest difference "
-             "| outcome changes | p99 per history (ms) | load at start |",
-             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| outcome changes | DomainErrors not one on every grid (of checked) | p99 per history (ms) "
+             "| load at start |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         c = r["counts"]
         lines.append(
             f"| {r['seed']} | {r['n']} | {c['success'] + c['success_branch_ends_early']} | {c['domain_error']} "
             f"| {c['convergence_error']} | {c['invariant_violation']} | {c['nan_in_output']} "
             f"| {c['other_exception']} | {r['over_1e-8']} ({r['points_checked']}) | {r['max_abs_diff']:.2g} "
-            f"| {len(r['outcome_flips'])} | {r['time_history_ms']['p99']:.1f} | {r['load']} |")
+            f"| {len(r['outcome_flips'])} | {len(r['domain_flips'])} ({r['domain_checked']}) "
+            f"| {r['time_history_ms']['p99']:.1f} | {r['load']} |")
     listed = [(r["seed"], e) for r in rows for e in r["convergence_errors"]]
     lines += ["", f"Every ConvergenceError ({len(listed)}):", ""]
     lines += [f"- seed {s}: `{json.dumps(e['scene'])}`: {e['detail']}" for s, e in listed] or ["none"]
-    flips = [(r["seed"], f) for r in rows for f in r["outcome_flips"]]
+    flips = [(r["seed"], f) for r in rows for f in r["outcome_flips"] + r["domain_flips"]]
     lines += ["", f"Every outcome change with the row count ({len(flips)}):", ""]
     lines += [f"- seed {s}: `{json.dumps(f['scene'])}` at {f['points']} rows" for s, f in flips] or ["none"]
     return "\n".join(lines) + "\n"
@@ -101,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     parts[args.membrane] = section(args.membrane, rows, command)
     head = ("# Domain stress runs over several seeds\n\n"
             "Each seed: `benchmarks/stress_domain.py` (its generator and invariants), 200 rows a history, "
-            "the first solved scenes re-run at 10, 11, 50, 200 and 1001 rows.\n\n")
+            "the first solved scenes (and as many DomainError scenes) re-run at 10, 11, 50, 200 and 1001 rows.\n\n")
     md.write_text(head + "\n".join(parts[k].rstrip() + "\n" for k in sorted(parts)))
     return 0
 

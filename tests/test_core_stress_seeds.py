@@ -124,3 +124,70 @@ def test_extrema_next_to_the_branch_end_do_not_depend_on_the_rows(scene):
         for k in ("f_min", "turning_point"):
             for q in ("f", "p", "a"):
                 assert abs(s[k][q] - dense.summary[k][q]) < 1e-8, (n, k, q)
+
+
+# frictionless delamination under displacement control (explicit in a) leaves Case I for a in about
+# (0.028, 0.0746) and comes back below: 11 and 12 rows stepped over the gap and returned a history
+# through it, the other grids raised the DomainError (stress seed 24, the DomainError re-run check).
+GAP = {"control": "displacement", "slip": "frictionless", "p": 0.9957184495909341, "w": 0.02193880994761169,
+       "rs": 0.9876575830106713, "a_max": 0.8836142554628047, "lambda0": 2.0}
+
+
+def test_the_gap_in_an_explicit_branch_is_found_on_every_grid():
+    import mpmath as mp
+
+    from adhfit.errors import DomainError
+    from tests.reference import mp_model as M
+    # independent: the 30-digit profile is outside the model inside the gap and inside it on either side
+    with mp.workdps(M.DPS):
+        alpha = mp.atan(mp.sqrt(2 * mp.mpf(GAP["w"])))
+        prof = lambda a: M.frictionless_profile(mp.mpf(GAP["p"]), mp.mpf(a), alpha, mp.mpf(GAP["rs"]))  # noqa: E731
+        prof("0.2"), prof("0.01")
+        with pytest.raises(M.Inadmissible):
+            prof("0.05")
+    ends = set()
+    for n in (10, 11, 12, 50, 1001):
+        with pytest.raises(DomainError) as info:
+            adhfit.simulate(**GAP, points=n)
+        assert "leave Case I below a = 0.0746" in str(info.value), n
+        ends.add(str(info.value).split("below a = ")[1][:9])
+    assert len(ends) == 1
+
+
+# histories through a stretch outside Case I, at coarse grids (the DomainError re-run check of the
+# stress run, seeds 3, 5, 7): a continuation step passed over the stretch where the clamp tangent is
+# past vertical (both its ends inside the model), or its first step landed on another branch (no-slip
+# pinning from t = 1 meets the Case I limit at small G; a step to larger G solved on the branch with
+# t < 1, which does not reach G = 0). Every grid must end at the same limit.
+OVER_THE_LIMIT = {
+    "pressure-frictionless-delamination": {"control": "pressure", "slip": "frictionless",
+                                           "d": -0.2690463281658979, "w": 5.613461446804348,
+                                           "rs": 0.49091086527439326, "p_max": 1.5026023255271568,
+                                           "lambda0": 2.0},
+    "explicit-gap-after-onset": {"control": "displacement", "slip": "frictionless", "p": 0.3240125556633191,
+                                 "w": 7.685382145541858, "rs": 65.87843194241198,
+                                 "a_max": 0.34262659247834426, "lambda0": 2.0919940607846508},
+    "no-slip-delamination": {"control": "displacement", "slip": "no-slip", "p": 0.6259120066383315,
+                             "w": 7.937047282253818, "rs": 1.1821017977438482, "a_max": 0.7832836030769987,
+                             "lambda0": 2.0},
+    "no-slip-pinning-first-step": {"control": "displacement", "slip": "no-slip", "p": -0.9661986761183983,
+                                   "w": 7.301014807653326, "rs": 0.09145134272746883,
+                                   "delta_max": 0.32146811895417443, "lambda0": 2.5099634216832163},
+    "no-slip-pinning-other-branch": {"control": "displacement", "slip": "no-slip", "p": -0.9440933102246627,
+                                     "w": 6.40570967121872, "rs": 0.34423278680230546,
+                                     "a_max": 0.15990304714991482, "lambda0": 4.065177314389983},
+}
+
+
+@pytest.mark.parametrize("name", sorted(OVER_THE_LIMIT))
+def test_no_history_passes_over_the_case_one_limit(name):
+    from adhfit.errors import DomainError
+    words = set()
+    for n in (10, 11, 50, 200, 1001):
+        with pytest.raises(DomainError) as info:
+            adhfit.simulate(**OVER_THE_LIMIT[name], points=n)
+        msg = str(info.value)
+        assert "Case I" in msg, (n, msg)
+        # the limit state (the continuation's stop before it differs with the grid)
+        words.add(msg.split(", before")[0].split("below a = ")[-1])
+    assert len(words) == 1, words  # the same end, to 8 digits, on every grid

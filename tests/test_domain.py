@@ -94,7 +94,7 @@ def test_frictionless_delamination_leaving_the_model_is_a_domain_error_a_state_c
     kw = dict(p=0.7416890298211145, w=5.263504219473203, rs=1.7432676236873814, a_max=0.5134500216830367)
     with pytest.raises(DomainError) as info:
         adhfit.simulate("displacement", "frictionless", **kw)
-    a_end = _number_after(str(info.value), "only for a >=")
+    a_end = _number_after(str(info.value), "leave Case I below a =")
     # second method: single explicit states either side of the reported radius
     from adhfit.loading import state_at
     ok = state_at("displacement", "frictionless", "delamination", **kw, a=a_end * (1 + 1e-6))

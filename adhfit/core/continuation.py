@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .branches import PIN_NS, admissible, is_implicit, observe
+from .branches import PIN_NS, admissible, clamp_margin, is_implicit, observe
 from .jit import jit
 from .newton import STEP
 from .solve import derivative_row, solve_one
@@ -95,6 +95,25 @@ def _near(implicit, pressure, x, k, xp, kp, x_last, k_last):
 
 
 @jit
+def _dips(s0, m0, s1, m1, s2, m2):
+    """Whether the parabola through three (step variable, clamp margin) points, the last two the
+    step just taken (s1 -> s2), falls below 0 between s1 and s2: the branch would leave Case I inside
+    the step (the clamp tangent past vertical) though both its ends are inside the model. A long step
+    can pass over such a gap (stress seeds 3 and 5: histories at 10 rows through states past
+    vertical that 50 and 1001 rows end at as a DomainError)."""
+    d01, d12 = (m1 - m0) / (s1 - s0), (m2 - m1) / (s2 - s1)
+    curv = (d12 - d01) / (s2 - s0)
+    if not curv > 0.0:
+        return False
+    # vertex of m(s) = m1 + d01 (s - s1) + curv (s - s0)(s - s1)... written about s1:
+    slope1 = d01 + curv * (s1 - s0)
+    sv = s1 - slope1 / (2.0 * curv)
+    if not (min(s1, s2) < sv < max(s1, s2)):
+        return False
+    return m1 + slope1 * (sv - s1) + curv * (sv - s1) ** 2 < 0.0
+
+
+@jit
 def _predict(ss, xs, ks, m, s):
     """x, kappa at s extrapolated from the last accepted states (quadratic
     through three, linear through two, else the last one)."""
@@ -136,12 +155,13 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
     implicit = is_implicit(code)
     n_t = targets.size
     cap = max_steps + 2
-    ss, xs, ks = np.empty(cap), np.empty(cap), np.empty(cap)
+    ss, xs, ks, mgs = np.empty(cap), np.empty(cap), np.empty(cap), np.empty(cap)
     out_x, out_k = np.empty(n_t), np.empty(n_t)
     out_obs = np.empty((7, n_t))
     ss[0] = _to_step(scale, l0)
     xs[0] = x0 if implicit else math.nan
     ks[0] = k0
+    mgs[0] = clamp_margin(code, x0 if implicit else 0.0, k0, l0, c, w, a_m)
     m = 1
     last = _to_step(scale, targets[n_t - 1])
     span = abs(last - ss[0])
@@ -179,6 +199,25 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
         if good:
             # every observable finite: at the Case I limit J0 can be finite where the gap is not
             good = admissible(observe(code, x, k, loc, c, w, a_m, obs), obs)
+        if good and solved:
+            # the step must not pass over a stretch outside Case I: a parabola in the step variable
+            # through the clamp margins of the last two states and this one (the first step: of the
+            # start, the step's midpoint, solved for it, and this one)
+            mg = clamp_margin(code, x, k, loc, c, w, a_m)
+            if m > 1:
+                good = not _dips(ss[m - 2], mgs[m - 2], ss[m - 1], mgs[m - 1], s_new, mg)
+            else:
+                s_mid = 0.5 * (ss[0] + s_new)
+                l_mid = _from_step(scale, s_mid)
+                xm, km, stm = solve_one(code, pressure, l_mid, 0.5 * (ks[0] + k) if pressure else k0,
+                                        0.5 * (xs[0] + x) if implicit else 0.0, c, w, a_m, L_m, d_fix)
+                # no state at the midpoint: the step's ends lie on two branches (stress seed 5: no-slip
+                # pinning from t = 1 meets the Case I limit at G = 0.0054, and a first step to G =
+                # 0.03 landed on the branch with t = 0.76)
+                good = stm == 0
+                if good:
+                    mg_mid = clamp_margin(code, xm, km, l_mid, c, w, a_m)
+                    good = mg_mid >= 0.0 and not _dips(ss[0], mgs[0], s_mid, mg_mid, s_new, mg)
         if good and solved and m > 1:
             # the root must be the one the predictor points at, not another branch's: held to the
             # polynomial predictor, else to the tangent at the last state (a polynomial through
@@ -223,6 +262,7 @@ def follow(code, pressure, l0, targets, x0, k0, c, w, a_m, L_m, d_fix, scale, ma
                 break
             continue
         ss[m], xs[m], ks[m] = s_new, (x if implicit else math.nan), k
+        mgs[m] = clamp_margin(code, x, k, loc, c, w, a_m)
         last_obs[:] = obs
         m += 1
         if s_new == goal:

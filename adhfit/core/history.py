@@ -123,6 +123,50 @@ def _to_branch_end(code, pressure, a_on, x_on, k_on, a_dl, path, kappa_dc, c, w,
     return res[2], res[8], st
 
 
+#: sub-points of each row interval at which an explicit branch's clamp margin is sampled
+GAP_SAMPLES = 16
+
+
+@jit
+def _gap_between(code, locs, kappa, c, w, a_m):
+    """A locator between two rows of an explicit branch where the state is outside Case I (the clamp
+    tangent past vertical, 1 - |sin theta(1)| < 0), or NaN: the margin sampled at GAP_SAMPLES points
+    a row interval, and each sampled local minimum refined by golden section. Rows alone miss such a
+    gap (stress seed 24: frictionless delamination leaves Case I for a in (0.028, 0.0746) and comes
+    back; 11 rows stepped over it and returned a history through it)."""
+    n = locs.size
+    m = (n - 1) * GAP_SAMPLES + 1
+    xs, ms = np.empty(m), np.empty(m)
+    for i in range(n - 1):
+        for j in range(GAP_SAMPLES):
+            q = i * GAP_SAMPLES + j
+            xs[q] = locs[i] + (locs[i + 1] - locs[i]) * j / GAP_SAMPLES
+    xs[m - 1] = locs[n - 1]
+    for q in range(m):
+        ms[q] = clamp_margin(code, xs[q], kappa, xs[q], c, w, a_m)
+        if ms[q] < 0.0:
+            return xs[q]
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    for q in range(1, m - 1):
+        if ms[q] <= ms[q - 1] and ms[q] <= ms[q + 1]:
+            lo, hi = xs[q - 1], xs[q + 1]
+            x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+            f1 = clamp_margin(code, x1, kappa, x1, c, w, a_m)
+            f2 = clamp_margin(code, x2, kappa, x2, c, w, a_m)
+            for _ in range(60):
+                if min(f1, f2) < 0.0:
+                    return x1 if f1 < f2 else x2
+                if f1 <= f2:
+                    hi, x2, f2 = x2, x1, f1
+                    x1 = hi - g * (hi - lo)
+                    f1 = clamp_margin(code, x1, kappa, x1, c, w, a_m)
+                else:
+                    lo, x1, f1 = x1, x2, f2
+                    x2 = lo + g * (hi - lo)
+                    f2 = clamp_margin(code, x2, kappa, x2, c, w, a_m)
+    return math.nan
+
+
 @jit
 def _delamination(pressure, no_slip, kappa_dc, c, w, a_m, L_m, d_fix, onset, on_x, a_end, u_dl,
                   err):
@@ -135,6 +179,11 @@ def _delamination(pressure, no_slip, kappa_dc, c, w, a_m, L_m, d_fix, onset, on_
         i = first_bad(ok, out[0], out[1], out[2], out[3], out[4], out[5])
         if i >= 0:
             err[0], err[1], err[2] = 2, i, a_dl[i]
+            return a_dl, a_dl.copy(), out, math.nan, H_STATE
+        a_gap = _gap_between(code, np.concatenate((np.array([a_on]), a_dl)), kappa_dc, c, w, a_m)
+        if math.isfinite(a_gap):
+            # every row is inside the model, but the branch leaves it between two of them
+            err[0], err[1], err[2] = 2, -1, a_gap
             return a_dl, a_dl.copy(), out, math.nan, H_STATE
         return a_dl, a_dl.copy(), out, math.nan, H_OK
     x_on = on_x if no_slip else math.nan
