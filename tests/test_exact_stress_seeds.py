@@ -239,3 +239,55 @@ def test_no_slip_pinning_that_would_enter_the_substrate_presses_on():
     assert np.all(np.diff(col["G"][pin]) > 0) and col["G"][pin][-1] == pytest.approx(sc["w"], rel=1e-9)
     assert h.summary["turning_point"]["f"] == h.summary["f_max"]
     _same_on_every_grid(sc)
+
+
+# seed 2, displacement control, frictionless, flat punch: the delamination branch meets the clamp's vertical
+# steeply in rho_a (theta_end rising ~12 per unit of rho_a there) at a = 0.23241; the march stalled just
+# before it, and Newton from the last state straight at the next rho_a failed: a ConvergenceError on 50-300
+# rows; on 10 and 11 rows the finer retry from the stall landed past it on another branch (a = 1.08, beyond
+# the clamp) and gave a history; 1001 rows found the DomainError
+VERTICAL_DEL = {"control": "displacement", "slip": "frictionless", "p": 0.9881968374222942,
+                "w": 0.040155760401110734, "rs": math.inf, "a_max": 0.7295076319166437,
+                "lambda0": 1.9429146564880362}
+
+
+def test_delamination_meeting_vertical_steeply_is_a_domain_error_on_every_grid():
+    """The same DomainError (its locator to 1e-9) on every grid. Independent of the history's code: the
+    delamination branch (G = w) continued here in the centre stretch lc (unknowns rho_a and alpha, no
+    check of the clamp's tangent) from a state solved at rho_a = 0.0612 through lc steps of 1e-4: rho_a
+    falls monotonically and theta_end rises through pi/2, at the locator's contact radius (to 1e-6)."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, _pinning
+    from adhfit.exact.solve import solve_state
+    from adhfit.exact.stages import delamination
+    from adhfit.exact.state import Config
+    sc = VERTICAL_DEL
+    locs = []
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="delamination branch .* turns past vertical") as err:
+            exact_history(**sc, points=n)
+        locs.append(float(str(err.value).split(" at a = ")[1].split()[0]))
+    assert max(locs) - min(locs) < 1e-9
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    _, on = _pinning(cfg, c, m)
+    st = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    s = st.solve(0.0612, [3.8, on.alpha])
+    assert s.theta_end < 0.5 * math.pi
+    x, rows = [s.rho_a, s.alpha], [s]
+    for k in range(1, 200):
+        s = solve_state(cfg, "frictionless", {"p": sc["p"], "lc": rows[0].lc + 1e-4 * k}, ("rho_a", "alpha"), x,
+                        ("clamp", "G"), {"w": sc["w"]}, tol=1e-11)
+        assert abs(s.G - sc["w"]) < 1e-9 and s.rho_a < rows[-1].rho_a
+        x = [s.rho_a, s.alpha]
+        rows.append(s)
+        if s.theta_end > 0.5 * math.pi + 1e-4:
+            break
+    th = np.array([r.theta_end for r in rows])
+    j = int(np.flatnonzero(th > 0.5 * math.pi)[0])
+    assert j > 1
+    a0, a1, t0, t1 = rows[j - 1].a, rows[j].a, th[j - 1], th[j]
+    a_cross = a0 + (a1 - a0) * (0.5 * math.pi - t0) / (t1 - t0)
+    assert abs(a_cross - locs[-1]) < 1e-6

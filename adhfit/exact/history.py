@@ -1040,6 +1040,10 @@ def _finish(stage, states, rho, c, no_slip, on):
     (the onset when none solved); raise a ConvergenceError naming where it stopped if that fails too."""
     k = len(states)
     base = states[-1] if states else on
+    # a branch that meets the clamp's vertical (nearly tangentially: theta_end rises steeply in rho_a)
+    # stalls the march there; the finer march below, from its last state, can land past the limit on
+    # another branch (seen on 10 rows: a = 1.08, beyond the clamp) and must not be taken for this one
+    _delamination_end(stage, c, base, rho[k])
     fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
     more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base), deep=12)
@@ -1073,13 +1077,27 @@ def _finish(stage, states, rho, c, no_slip, on):
 def _delamination_end(stage, c, good, v_bad):
     """The delamination march stopped after the solved state ``good``: when the state at ``v_bad`` (the
     next rho_a) solves and turns past vertical at the clamp, bisect in rho_a between solved states for
-    the Case I limit and raise it as a DomainError. Returns when not shown."""
-    try:
-        stage.solve(v_bad, stage.x(good))
-        return
-    except PastVertical:
-        pass
-    except ConvergenceError:
+    the Case I limit and raise it as a DomainError. The state at ``v_bad`` is approached from ``good`` on
+    steps growing from 2^-12 of the way (each solved from the last one), since near a limit met nearly
+    tangentially Newton from ``good`` straight at ``v_bad`` fails (seen: 50-300 rows stopped 1e-6 in
+    rho_a before it where 1001 rows found it). Returns when not shown."""
+    span, h = v_bad - good.rho_a, 2.0 ** -12
+    for _ in range(60):
+        v = v_bad if h >= 1.0 else good.rho_a + span * h
+        try:
+            nxt = stage.solve(v, stage.x(good))
+        except PastVertical:
+            v_bad = v
+            break
+        except ConvergenceError:
+            h *= 0.25
+            if h < 2.0 ** -24:
+                return
+            continue
+        if v == v_bad:
+            return
+        span, good, h = v_bad - v, nxt, 2.0 * h
+    else:
         return
     found = _bisect_case_one(stage, good, good.rho_a, v_bad)
     if found is None:
