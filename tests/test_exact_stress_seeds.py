@@ -291,3 +291,43 @@ def test_delamination_meeting_vertical_steeply_is_a_domain_error_on_every_grid()
     a0, a1, t0, t1 = rows[j - 1].a, rows[j].a, th[j - 1], th[j]
     a_cross = a0 + (a1 - a0) * (0.5 * math.pi - t0) / (t1 - t0)
     assert abs(a_cross - locs[-1]) < 1e-6
+
+
+# seed 2, displacement control, no slip, p = -0.578: pinning is marched in alpha up to a fold of alpha (2.6175,
+# the handover to the control). On 50 and 200 rows a row solved on another branch (lambda1+ = 0.70 where the
+# branch has 0.98; the clamp tangent -0.15 against -1.18) and the march stalled on it: a ConvergenceError (or a
+# false slack DomainError); on 10 and 11 rows the only row in alpha lay on the fold itself (2 u = 1 to
+# rounding), where Newton in alpha does not converge
+PIN_JUMP = {"control": "displacement", "slip": "no-slip", "p": -0.5776374910167641, "w": 2.2694848735519155,
+            "rs": 1.186919775940009, "a_max": 0.9048270047761684, "lambda0": 1.0593571856987913}
+
+
+def test_no_slip_pinning_rows_stay_on_their_branch():
+    """Independent: the pinning branch marched here in alpha from the end of loading on steps of 1e-3
+    (lambda1+ within 0.01 from step to step); every 200-row pinning row with alpha below the fold lies on it
+    (lambda1+ and d interpolated in alpha, to 1e-6); the summary is the same on every grid."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, march
+    from adhfit.exact.stages import pinning
+    from adhfit.exact.state import Config
+    sc = PIN_JUMP
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    st = pinning(cfg, c.control, c.slip, m, c.p, c.d)
+    al = np.arange(1e-3, 2.6, 1e-3)
+    sts = march(st, list(al), st.x(m))
+    l1 = np.array([s.l1p for s in sts])
+    assert len(sts) == len(al) and np.max(np.abs(np.diff(l1))) < 0.01
+    d = np.array([s.d for s in sts])
+    h = exact_history(**sc, points=200)
+    col = h.columns
+    rows = (col["stage"] == "pinning") & (col["alpha"] < 2.59) & (col["alpha"] > 1e-3)
+    seg = np.flatnonzero(rows)
+    seg = seg[seg < np.flatnonzero(col["alpha"] == col["alpha"][col["stage"] == "pinning"].max())[0]]
+    assert len(seg) >= 5
+    for i in seg:
+        assert abs(np.interp(col["alpha"][i], al, d) - col["d"][i]) < 1e-6
+        assert abs(np.interp(col["alpha"][i], al, l1) - h.states[i].l1p) < 1e-5
+    _same_on_every_grid(sc)

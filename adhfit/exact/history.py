@@ -441,7 +441,7 @@ def _pinning(cfg, c, m):
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
         try:
-            rows, failed = _rows(pin, u * on.alpha, pin.x(m), c), None
+            rows, failed = _rows(pin, u * on.alpha, pin.x(m), c, (0.0, m)), None
         except (ConvergenceError, DomainError) as exc:
             # (seen on 1001 rows: the small steps took the branch that presses on, p rising to 1.21 above
             # the loading end's 0.99, and stalled near vertical at the clamp at alpha = 0.366, where 200
@@ -469,7 +469,11 @@ def _pinning(cfg, c, m):
         rows = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(m)[:1] + [0.0], c)
         c.pin_parts = [(ctl, [m] + rows + [on])]
         return rows + [on], on
-    first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
+    alphas = 2.0 * u[u < 0.5] * turn.alpha
+    # a row at the handover itself (2 u = 1 to rounding: sin(pi/6) < 0.5 on 10 and 11 rows) is ``turn``: there
+    # alpha is at its fold, where Newton in alpha does not converge (seen: no slip, p = -0.578)
+    at = alphas >= turn.alpha * (1.0 - 1e-12)
+    first = _rows(pin, alphas[~at], pin.x(m), c, (0.0, m)) + [turn] * int(np.count_nonzero(at))
     values = val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn))
     second = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(turn), c)
     c.pin_parts = [(pin, [m] + first + [turn]), (ctl, [turn] + second + [on])]
@@ -511,11 +515,12 @@ def _on_path(c, v, x0):
     return [float(np.interp(v, vs[order], xs[order, j])) for j in range(xs.shape[1])]
 
 
-def _rows(stage, values, x0, c):
+def _rows(stage, values, x0, c, ref=None):
     """``march`` over pinning rows; a row whose state turns past vertical at the clamp (the bracket's
     long steps can pass over a stretch of the branch that leaves Case I) is bisected against the last
-    solved row to 1e-10 and raised as the branch's Case I limit (a DomainError)."""
-    states = march(stage, values, x0, stop_ok=True)
+    solved row to 1e-10 and raised as the branch's Case I limit (a DomainError). ``ref`` = (value, state):
+    the solved state ``x0`` is taken from, against which the first row is checked (``_march_smooth``)."""
+    states = _march_smooth(stage, list(values), x0, ref=ref)
     if len(states) == len(values):
         return states
     good = states[-1] if states else None
@@ -551,6 +556,33 @@ def _rows(stage, values, x0, c):
     return march(stage, values, x0)
 
 
+
+
+JUMP = 0.1  # the largest change of the clamp tangent theta(1) between pinning rows taken without a check
+
+
+def _march_smooth(stage, values, x0, start=None, depth: int = 0, ref=None) -> list:
+    """``march`` (stop_ok) whose rows do not jump between branches: a row whose clamp tangent differs from
+    the previous row's by more than JUMP (over a step longer than 1e-3, as ``march.bracket_rows`` checks
+    its steps) is marched again from the previous row on eight steps, each checked the same way (up to
+    4 times deep); the rows up to where such a march stops (the caller handles the stop). Seen: no
+    slip, displacement control, p = -0.578, 200 rows: from alpha = 0.42 (theta(1) = -1.10, lambda1+ =
+    1.00) the next row (alpha = 0.63) solved on another branch (theta(1) = -0.15, lambda1+ = 0.70) and the
+    march stalled on it; on steps of 1e-3 the branch has theta(1) = -1.18 and lambda1+ = 0.98 there; on 50
+    rows the first row did, checked against ``ref`` (the solved state ``x0`` is from, when not ``start``)."""
+    states = march(stage, values, x0, stop_ok=True, start=start)
+    prev = start or ref
+    for k, st in enumerate(states):
+        if prev is not None and abs(st.theta_end - prev[1].theta_end) > JUMP and abs(values[k] - prev[0]) > 1e-3 \
+                and depth < 4:
+            sub = list(np.linspace(prev[0], values[k], 9)[1:])
+            got = _march_smooth(stage, sub, stage.x(prev[1]), prev, depth + 1)
+            if len(got) < len(sub):
+                return states[:k]
+            return states[:k] + [got[-1]] + _march_smooth(stage, values[k + 1:], stage.x(got[-1]),
+                                                          (values[k], got[-1]), depth)
+        prev = (values[k], st)
+    return states
 
 
 def _control_value(c):
