@@ -331,3 +331,41 @@ def test_no_slip_pinning_rows_stay_on_their_branch():
         assert abs(np.interp(col["alpha"][i], al, d) - col["d"][i]) < 1e-6
         assert abs(np.interp(col["alpha"][i], al, l1) - h.states[i].l1p) < 1e-5
     _same_on_every_grid(sc)
+
+
+# seed 2, displacement control, no slip, sphere (rs = 0.024): on 10 and 11 rows the delamination march on its
+# fine steps passed the branch end (alpha = 0, a = 0.0087) between two of its states, but the history's last
+# row before it had alpha = 0.55; the retry from that row stalled at alpha = 0.204 (above the 0.2 that marks a
+# branch end as reached): a ConvergenceError where 50 rows and more end the branch
+NO_SLIP_END_SKIPPED = {"control": "displacement", "slip": "no-slip", "p": 0.5111712743357746,
+                       "w": 0.19038904867822415, "rs": 0.024080653133154082, "a_max": 0.019320483508876007,
+                       "lambda0": 2.5546809207809607}
+
+
+def test_no_slip_end_passed_between_fine_steps_on_few_rows():
+    """Independent: the delamination branch marched here in rho_a from the onset on 4000 steps: alpha
+    changes sign once, between rows whose linear interpolation in alpha puts the end's contact radius
+    within 1e-6 of the history's ``delamination_ends_at_a`` on every grid (which agree to 1e-9); the
+    summary is the same on every grid."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, _pinning, march
+    from adhfit.exact.stages import delamination
+    from adhfit.exact.state import Config
+    sc = NO_SLIP_END_SKIPPED
+    ends = [exact_history(**sc, points=n).inputs["delamination_ends_at_a"] for n in GRIDS]
+    assert max(ends) - min(ends) < 1e-9
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    _, on = _pinning(cfg, c, m)
+    st = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    rho = on.rho_a * (1.0 - np.arange(1, 3000) / 4000.0)
+    sts = march(st, list(rho), st.x(on), stop_ok=True, start=(on.rho_a, on))
+    al = np.array([s.alpha for s in sts])
+    k = int(np.flatnonzero(al < 0.0)[0])
+    assert np.all(al[:k] > 0.0) and k > 10
+    s0, s1 = sts[k - 1], sts[k]
+    a_end = s0.a + (s1.a - s0.a) * s0.alpha / (s0.alpha - s1.alpha)
+    assert abs(a_end - ends[-1]) < 1e-6
+    _same_on_every_grid(sc)

@@ -971,9 +971,19 @@ def _delamination(cfg, c, m, on):
         k = next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))
         past = states[k] if k < len(states) else None
         states = states[:k]
-    ends = lambda sts: no_slip and (sts[-1] if sts else on).alpha < 0.2  # noqa: E731
+    crossed = False
+    ends = lambda sts: no_slip and (crossed or (sts[-1] if sts else on).alpha < 0.2)  # noqa: E731
     if len(states) < len(rho) and not ends(states):
-        states = _finish(stage, states, rho, c, no_slip, on)
+        try:
+            states = _finish(stage, states, rho, c, no_slip, on)
+        except ConvergenceError:
+            # the march on the fine steps itself passed alpha = 0 between two of its states (the history's
+            # rows skip them): the branch end is bracketed there (seen: no slip, 10 rows, the last row before
+            # it at alpha = 0.55, the retry from it stalling at alpha = 0.204 where 50 rows reach the end)
+            j = next((i for i, st in enumerate(sol) if st.alpha < 0.0), 0) if no_slip else 0
+            if j == 0 or (states and states[-1].rho_a <= sol[j - 1].rho_a):
+                raise
+            states, past, crossed = states + [sol[j - 1]], sol[j], True
     if len(states) < len(rho) and ends(states) and (states or on.alpha >= 0.0):
         # (an onset at alpha < 0, reached by pinning continued in the control, has no branch from it)
         last = states[-1] if states else on
