@@ -369,3 +369,48 @@ def test_no_slip_end_passed_between_fine_steps_on_few_rows():
     a_end = s0.a + (s1.a - s0.a) * s0.alpha / (s0.alpha - s1.alpha)
     assert abs(a_end - ends[-1]) < 1e-6
     _same_on_every_grid(sc)
+
+
+# seed 2, pressure control, frictionless: the turning point (the least p along delamination, a = 0.0135 near
+# detachment) is flat (p'' ~ 8 in rho_a); on 10 and 11 rows the quartic's vertex was accepted 0.042 h off
+# its stencil's centre (within 0.05 h), its a 3.3e-8 off the 1001-row one (centred there)
+FLAT_TURN = {"control": "pressure", "slip": "frictionless", "d": -0.463733091600647, "w": 0.0003937175126646584,
+             "rs": 0.617900151293699, "a_max": 0.3174400150584697, "lambda0": 1.1383095391471063}
+
+
+def test_flat_turning_point_same_on_every_grid():
+    """Independent: the turning point located here as the root of the slope of p in rho_a along delamination
+    (central differences at h = 2e-4 and 1e-4 Richardson-extrapolated, states solved to 1e-13, secant
+    iterations): every grid's turning point has its contact radius within 2e-8 of it (the stencil's
+    truncation) and its p within 1e-13; the summary is the same on every grid (to 1e-8)."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, _pinning
+    from adhfit.exact.stages import delamination
+    from adhfit.exact.state import Config
+    sc = FLAT_TURN
+    c = prepare(sc["control"], sc["slip"], None, sc["d"], sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
+                None, None, 50, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    _, on = _pinning(cfg, c, m)
+    st = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    ref = st.solve(0.010176, st.x(on), tol=1e-12)
+    ref = st.solve(0.010176, st.x(ref), tol=1e-13)
+
+    def slope(x):
+        def dd(h):
+            return (st.solve(x + h, st.x(ref), tol=1e-13).p - st.solve(x - h, st.x(ref), tol=1e-13).p) / (2 * h)
+        d1, d2 = dd(2e-4), dd(1e-4)
+        return d2 + (d2 - d1) / 3.0
+    x0, x1 = 0.010176, 0.0101765
+    f0, f1 = slope(x0), slope(x1)
+    for _ in range(6):
+        if f1 == f0:
+            break
+        x0, f0, x1 = x1, f1, x1 - f1 * (x1 - x0) / (f1 - f0)
+        f1 = slope(x1)
+    star = st.solve(x1, st.x(ref), tol=1e-13)
+    for n in GRIDS:
+        tp = exact_history(**sc, points=n).summary["turning_point"]
+        assert abs(tp["a"] - star.a) < 2e-8 and abs(tp["p"] - star.p) < 1e-13, n
+    _same_on_every_grid(sc)
