@@ -1,4 +1,4 @@
-"""Stress-seed scenes of the exact membrane (issue 24: seeds 3, 7, 11, 24), each one's fix checked
+"""Stress-seed scenes of the exact membrane (issue 24: seeds 2, 3, 7, 11, 24), each one's fix checked
 independently of the code under test where possible (another row grid, the branch's own states, the
 analytic identity of the contact force)."""
 import math
