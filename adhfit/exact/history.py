@@ -441,7 +441,7 @@ def _pinning(cfg, c, m):
     u = np.sin(0.5 * np.pi * np.arange(1, c.n_pin) / (c.n_pin - 1))[:-1]
     if ctl is None:
         try:
-            rows, failed = _rows(pin, u * on.alpha, pin.x(m), c), None
+            rows, failed = _rows(pin, u * on.alpha, pin.x(m), c, (0.0, m)), None
         except (ConvergenceError, DomainError) as exc:
             # (seen on 1001 rows: the small steps took the branch that presses on, p rising to 1.21 above
             # the loading end's 0.99, and stalled near vertical at the clamp at alpha = 0.366, where 200
@@ -469,7 +469,11 @@ def _pinning(cfg, c, m):
         rows = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(m)[:1] + [0.0], c)
         c.pin_parts = [(ctl, [m] + rows + [on])]
         return rows + [on], on
-    first = _rows(pin, 2.0 * u[u < 0.5] * turn.alpha, pin.x(m), c)
+    alphas = 2.0 * u[u < 0.5] * turn.alpha
+    # a row at the handover itself (2 u = 1 to rounding: sin(pi/6) < 0.5 on 10 and 11 rows) is ``turn``: there
+    # alpha is at its fold, where Newton in alpha does not converge (seen: no slip, p = -0.578)
+    at = alphas >= turn.alpha * (1.0 - 1e-12)
+    first = _rows(pin, alphas[~at], pin.x(m), c, (0.0, m)) + [turn] * int(np.count_nonzero(at))
     values = val(turn) + (2.0 * u[u >= 0.5] - 1.0) * (val(on) - val(turn))
     second = _rows_on_path(ctl, values, c) or _rows(ctl, values, ctl.x(turn), c)
     c.pin_parts = [(pin, [m] + first + [turn]), (ctl, [turn] + second + [on])]
@@ -511,11 +515,12 @@ def _on_path(c, v, x0):
     return [float(np.interp(v, vs[order], xs[order, j])) for j in range(xs.shape[1])]
 
 
-def _rows(stage, values, x0, c):
+def _rows(stage, values, x0, c, ref=None):
     """``march`` over pinning rows; a row whose state turns past vertical at the clamp (the bracket's
     long steps can pass over a stretch of the branch that leaves Case I) is bisected against the last
-    solved row to 1e-10 and raised as the branch's Case I limit (a DomainError)."""
-    states = march(stage, values, x0, stop_ok=True)
+    solved row to 1e-10 and raised as the branch's Case I limit (a DomainError). ``ref`` = (value, state):
+    the solved state ``x0`` is taken from, against which the first row is checked (``_march_smooth``)."""
+    states = _march_smooth(stage, list(values), x0, ref=ref)
     if len(states) == len(values):
         return states
     good = states[-1] if states else None
@@ -551,6 +556,33 @@ def _rows(stage, values, x0, c):
     return march(stage, values, x0)
 
 
+
+
+JUMP = 0.1  # the largest change of the clamp tangent theta(1) between pinning rows taken without a check
+
+
+def _march_smooth(stage, values, x0, start=None, depth: int = 0, ref=None) -> list:
+    """``march`` (stop_ok) whose rows do not jump between branches: a row whose clamp tangent differs from
+    the previous row's by more than JUMP (over a step longer than 1e-3, as ``march.bracket_rows`` checks
+    its steps) is marched again from the previous row on eight steps, each checked the same way (up to
+    4 times deep); the rows up to where such a march stops (the caller handles the stop). Seen: no
+    slip, displacement control, p = -0.578, 200 rows: from alpha = 0.42 (theta(1) = -1.10, lambda1+ =
+    1.00) the next row (alpha = 0.63) solved on another branch (theta(1) = -0.15, lambda1+ = 0.70) and the
+    march stalled on it; on steps of 1e-3 the branch has theta(1) = -1.18 and lambda1+ = 0.98 there; on 50
+    rows the first row did, checked against ``ref`` (the solved state ``x0`` is from, when not ``start``)."""
+    states = march(stage, values, x0, stop_ok=True, start=start)
+    prev = start or ref
+    for k, st in enumerate(states):
+        if prev is not None and abs(st.theta_end - prev[1].theta_end) > JUMP and abs(values[k] - prev[0]) > 1e-3 \
+                and depth < 4:
+            sub = list(np.linspace(prev[0], values[k], 9)[1:])
+            got = _march_smooth(stage, sub, stage.x(prev[1]), prev, depth + 1)
+            if len(got) < len(sub):
+                return states[:k]
+            return states[:k] + [got[-1]] + _march_smooth(stage, values[k + 1:], stage.x(got[-1]),
+                                                          (values[k], got[-1]), depth)
+        prev = (values[k], st)
+    return states
 
 
 def _control_value(c):
@@ -939,9 +971,19 @@ def _delamination(cfg, c, m, on):
         k = next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))
         past = states[k] if k < len(states) else None
         states = states[:k]
-    ends = lambda sts: no_slip and (sts[-1] if sts else on).alpha < 0.2  # noqa: E731
+    crossed = False
+    ends = lambda sts: no_slip and (crossed or (sts[-1] if sts else on).alpha < 0.2)  # noqa: E731
     if len(states) < len(rho) and not ends(states):
-        states = _finish(stage, states, rho, c, no_slip, on)
+        try:
+            states = _finish(stage, states, rho, c, no_slip, on)
+        except ConvergenceError:
+            # the march on the fine steps itself passed alpha = 0 between two of its states (the history's
+            # rows skip them): the branch end is bracketed there (seen: no slip, 10 rows, the last row before
+            # it at alpha = 0.55, the retry from it stalling at alpha = 0.204 where 50 rows reach the end)
+            j = next((i for i, st in enumerate(sol) if st.alpha < 0.0), 0) if no_slip else 0
+            if j == 0 or (states and states[-1].rho_a <= sol[j - 1].rho_a):
+                raise
+            states, past, crossed = states + [sol[j - 1]], sol[j], True
     if len(states) < len(rho) and ends(states) and (states or on.alpha >= 0.0):
         # (an onset at alpha < 0, reached by pinning continued in the control, has no branch from it)
         last = states[-1] if states else on
@@ -1040,6 +1082,10 @@ def _finish(stage, states, rho, c, no_slip, on):
     (the onset when none solved); raise a ConvergenceError naming where it stopped if that fails too."""
     k = len(states)
     base = states[-1] if states else on
+    # a branch that meets the clamp's vertical (nearly tangentially: theta_end rises steeply in rho_a)
+    # stalls the march there; the finer march below, from its last state, can land past the limit on
+    # another branch (seen on 10 rows: a = 1.08, beyond the clamp) and must not be taken for this one
+    _delamination_end(stage, c, base, rho[k])
     fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
     more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base), deep=12)
@@ -1073,13 +1119,27 @@ def _finish(stage, states, rho, c, no_slip, on):
 def _delamination_end(stage, c, good, v_bad):
     """The delamination march stopped after the solved state ``good``: when the state at ``v_bad`` (the
     next rho_a) solves and turns past vertical at the clamp, bisect in rho_a between solved states for
-    the Case I limit and raise it as a DomainError. Returns when not shown."""
-    try:
-        stage.solve(v_bad, stage.x(good))
-        return
-    except PastVertical:
-        pass
-    except ConvergenceError:
+    the Case I limit and raise it as a DomainError. The state at ``v_bad`` is approached from ``good`` on
+    steps growing from 2^-12 of the way (each solved from the last one), since near a limit met nearly
+    tangentially Newton from ``good`` straight at ``v_bad`` fails (seen: 50-300 rows stopped 1e-6 in
+    rho_a before it where 1001 rows found it). Returns when not shown."""
+    span, h = v_bad - good.rho_a, 2.0 ** -12
+    for _ in range(60):
+        v = v_bad if h >= 1.0 else good.rho_a + span * h
+        try:
+            nxt = stage.solve(v, stage.x(good))
+        except PastVertical:
+            v_bad = v
+            break
+        except ConvergenceError:
+            h *= 0.25
+            if h < 2.0 ** -24:
+                return
+            continue
+        if v == v_bad:
+            return
+        span, good, h = v_bad - v, nxt, 2.0 * h
+    else:
         return
     found = _bisect_case_one(stage, good, good.rho_a, v_bad)
     if found is None:
@@ -1197,7 +1257,9 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
 
     def polish(x):
         """The vertex of the quartic through the stencil about x, re-centred (up to 5 times) until it
-        lies within 0.05 h of the centre: (x, converged: within 1.5 h at the last)."""
+        lies within 0.005 h of the centre: (x, converged: within 1.5 h at the last). (Within 0.05 h was
+        taken once: a vertex 0.042 h off the centre, a turning point's a 3.3e-8 off the centred one, seed 2's
+        pressure-control scene on 10 rows; re-centred, the next vertex lies ~1e-4 h off.)"""
         h = stencil(x)
         near = False
         if not h > 0.0:
@@ -1212,7 +1274,7 @@ def _extremum(stage, states, key, sign, scale=None, limits=None):
             v = _vertex(grid, [sign * key(st) for st in pts], x, h)
             if v is None:
                 return x, False
-            if abs(v - x) <= 0.05 * h:
+            if abs(v - x) <= 0.005 * h:
                 return v, True
             # re-centred on the vertex: off-centre the quartic's vertex carries its O(h^4) error (a
             # vertex 0.075 h off the centre was 5e-8 off the centred one)
