@@ -195,6 +195,8 @@ def _early_end(frame, summary: dict, a_max: float, ends_at: float, slip: str) ->
         ``inputs["delamination_ends_at_a"]``.
     slip : str
         The scene's interface condition.
+    rs : float
+        The substrate's radius over the membrane's (inf: flat).
 
     Returns
     -------
@@ -217,7 +219,7 @@ def _early_end(frame, summary: dict, a_max: float, ends_at: float, slip: str) ->
 
 
 def _invariants(frame, summary: dict, w: float, ends_at: float | None = None,
-                slip: str = "no-slip") -> list[str]:
+                slip: str = "no-slip", rs: float = math.inf) -> list[str]:
     """Contracts every finite history must meet (see the module docstring).
 
     Parameters
@@ -261,6 +263,10 @@ def _invariants(frame, summary: dict, w: float, ends_at: float | None = None,
         bad.append(f"f_min {fmin!r} above the least pinning/delamination row force {back.min()!r}")
     a = frame["a"].to_numpy(dtype=float)
     a_max = a[mk[-1]] if mk.size else a.max()
+    # the contact edge inside the clamp (radius 1) and, on a sphere, not past its equator
+    if a.min() < 0.0 or a.max() >= 1.0 or a.max() > rs * (1 + 1e-12):
+        bad.append(f"contact radius outside [0, min(1, rs)): min {a.min():.6g}, max {a.max():.6g}, "
+                   f"rs {rs:.6g}")
     if ends_at is not None:
         bad += _early_end(frame, summary, a_max, ends_at, slip)
     elif a[-1] > 1e-2 * a_max:
@@ -289,7 +295,7 @@ def classify(frame, summary: dict, inputs: dict, scene: dict) -> dict:
     bad = _nonfinite(frame) + _summary_nonfinite(summary) + bad
     if bad:
         return {"kind": "nan_in_output", "detail": "; ".join(bad), "rows": len(frame)}
-    bad = _invariants(frame, summary, scene["w"], ends_at, scene["slip"])
+    bad = _invariants(frame, summary, scene["w"], ends_at, scene["slip"], float(scene.get("rs", math.inf)))
     if bad:
         return {"kind": "invariant_violation", "detail": "; ".join(bad), "rows": len(frame)}
     if ends_at is None:
