@@ -966,6 +966,8 @@ def _delamination(cfg, c, m, on):
     sol = march(stage, fine, stage.x(on), stop_ok=True, start=(on.rho_a, on))
     states = [sol[i] for i in keep if i < len(sol)]
     no_slip = c.slip == "no-slip"
+    cut = next((i for i, s in enumerate(sol) if no_slip and s.alpha < 0.0), len(sol))
+    _equator_between(stage, c, [on] + sol[:cut], fine[cut] if cut < len(fine) else None)
     past = None
     if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
         k = next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))
@@ -1015,6 +1017,77 @@ def _delamination(cfg, c, m, on):
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
     return states, stage, None
+
+
+EQUATOR_NEAR = 0.05  # a local minimum of 1 - a/rs among delamination states below this is refined between them
+
+
+def _equator_between(stage, c, sts, nxt=None):
+    """The contact edge at the sphere's equator between delamination states: the rows are checked
+    (``_check_membrane``), not what lies between them, and the edge can approach the equator and turn
+    back inside one step (coarse rows gave a history where 1001 rows reach a = rs). Every solved state of
+    the march (``sts``, on steps of at most DEL_STEP of the onset's rho_a, in path order) is checked, and
+    each sampled local minimum of the margin 1 - a/rs below ``EQUATOR_NEAR`` is refined by Brent's method
+    on solved states between its neighbours (each solved from the nearest solved one); a state whose
+    edge is at the equator (``_outside``) is raised as ``_check_membrane`` raises it. ``nxt``: the value the
+    march failed at (it stopped after ``sts[-1]``): a least margin at the last state is refined toward it.
+    Returns when none is."""
+    if not c.crv > 0.0 or len(sts) < 2:
+        return
+    _check_membrane(c, [("delamination", s) for s in sts[1:]])
+    par = lambda st: float(st.rho_a)  # noqa: E731
+    marg = [1.0 - st.a * c.crv for st in sts]
+    n = len(sts)
+    for j in range(n):
+        # a sampled local minimum, the march's ends included (the onset: the edge can run to the equator
+        # within the first step, seen on 10 rows where 1001 rows have it there at once)
+        left = marg[j - 1] if j > 0 else math.inf
+        right = marg[j + 1] if j + 1 < n else math.inf
+        if j == n - 1 and nxt is not None and marg[j] <= left and marg[j] < EQUATOR_NEAR:
+            # the march stopped here: the edge may reach the equator before the value it failed at
+            _equator_refine(stage, c, sts[j], float(nxt), marg[j])
+        if not (marg[j] <= left and marg[j] <= right and marg[j] < EQUATOR_NEAR):
+            continue
+        _equator_refine(stage, c, sts[max(j - 1, 0)], par(sts[min(j + 1, n - 1)]), marg[j])
+
+
+EQUATOR_SUB = 64  # ... on this many steps between its neighbours
+EQUATOR_LEVELS = 3  # ... and again about the least of them, this many times
+
+
+def _equator_refine(stage, c, s0, v1, m0):
+    """March the delamination branch from the solved state ``s0`` to rho_a = ``v1`` on ``EQUATOR_SUB`` steps in
+    rho_a (each failed step split), raising the first state whose edge is at the sphere's equator
+    (``_check_membrane``); about the least margin found (when below ``m0``, the sampled one), again, up
+    to ``EQUATOR_LEVELS`` deep. Near the equator 1 - a/rs falls steeply in rho_a (seen: from 1e-5 to
+    past 0 in 3e-4 of rho_a) and a march on the history's steps lands past it on another branch, its a
+    falling again (10 rows: 1 - a/rs = 1.8e-5 at the last state before it)."""
+    par = lambda st: float(st.rho_a)  # noqa: E731
+    for _ in range(EQUATOR_LEVELS):
+        sub = [float(v) for v in np.linspace(par(s0), v1, EQUATOR_SUB + 1)[1:]]
+        try:
+            got = march(stage, sub, stage.x(s0), stop_ok=True, start=(par(s0), s0), deep=12)
+        except ConvergenceError:
+            return
+        if not got:
+            return
+        for k, st in enumerate(got):
+            if _outside(c, st) == "equator":
+                _check_membrane(c, [("delamination", st)])
+            if k and abs(st.a - got[k - 1].a) > 0.25 * c.rs:
+                got = got[:k]  # a jump onto another branch: not followed
+                break
+        seq = [s0] + got
+        marg = [1.0 - st.a * c.crv for st in seq]
+        k = int(np.argmin(marg))
+        if not marg[k] < m0:
+            return
+        if k == len(seq) - 1:  # the least at the last state solved: toward the next value (or v1)
+            v1 = sub[len(got)] if len(got) < len(sub) else v1
+            s0 = seq[max(k - 1, 0)]
+        else:
+            s0, v1 = seq[max(k - 1, 0)], par(seq[k + 1])
+        m0 = marg[k]
 
 
 DEL_STEP = 0.05  # the longest step in rho_a of the delamination march, as a fraction of the onset's
@@ -1089,6 +1162,8 @@ def _finish(stage, states, rho, c, no_slip, on):
     fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
     more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base), deep=12)
+    cut = next((i for i, s in enumerate(more) if no_slip and s.alpha < 0.0), len(more))
+    _equator_between(stage, c, [base] + more[:cut], rest[cut] if cut < len(rest) else None)
     if no_slip:
         more = more[:next((i for i, s in enumerate(more) if s.alpha < 0.0), len(more))]
     kept = more[3::4]  # the history's own rows (every fourth value of the finer grid)
