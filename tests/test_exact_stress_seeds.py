@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import adhfit
-from adhfit.errors import DomainError
+from adhfit.errors import ConvergenceError, DomainError
 from adhfit.exact import kernels as K
 from adhfit.exact.history import exact_history
 
@@ -414,3 +414,58 @@ def test_flat_turning_point_same_on_every_grid():
         tp = exact_history(**sc, points=n).summary["turning_point"]
         assert abs(tp["a"] - star.a) < 2e-8 and abs(tp["p"] - star.p) < 1e-13, n
     _same_on_every_grid(sc)
+
+
+# six frictionless scenes (displacement control) whose delamination branch carries the contact edge to the
+# sphere's equator within one step of the history's rows: on 10 and 11 rows (50 too for two of them) the
+# march stepped past it onto another branch (a falling again) and returned a history; 1001 rows prove a = rs
+EQUATOR = {
+    "s1": {"control": "displacement", "slip": "frictionless", "p": 0.36735439358701316, "w": 0.00031259301230824986,
+           "rs": 0.5124442357201477, "delta_max": 0.8728324245272762, "lambda0": 2.7655775058208825},
+    "s2": {"control": "displacement", "slip": "frictionless", "p": -0.7260345712065515, "w": 0.00014779182143689402,
+           "rs": 0.021953514749671277, "a_max": 0.019488176097841522, "lambda0": 2.0707687416907334},
+    "s4": {"control": "displacement", "slip": "frictionless", "p": 0.12151333599780623, "w": 0.0005457697824094171,
+           "rs": 0.2127047124189917, "a_max": 0.20147958717277656, "lambda0": 2.0558870159032776},
+    "s7": {"control": "displacement", "slip": "frictionless", "p": -0.6846364761243735, "w": 0.0007181046225948551,
+           "rs": 0.021001063093705464, "a_max": 0.01961404512410852, "lambda0": 1.8351783278989775},
+    "s8": {"control": "displacement", "slip": "frictionless", "p": -0.4598590942448595, "w": 0.010544557074958764,
+           "rs": 0.5266807479173881, "delta_max": 0.9111962578618391, "lambda0": 1.9154934014350846},
+    "s9": {"control": "displacement", "slip": "frictionless", "p": -0.08394176894038985, "w": 0.0014771093784706714,
+           "rs": 0.3074227678740187, "a_max": 0.2841624136451513, "lambda0": 2.472601735037768},
+}
+
+
+@pytest.mark.parametrize("name", sorted(EQUATOR))
+def test_delamination_equator_same_on_every_grid(name):
+    """Independent: the delamination branch marched here from the onset state by state (Newton from the
+    previous one, steps of 1e-3 of the onset's rho_a, no history logic) reaches a state whose contact edge
+    is at the sphere's equator (a >= rs (1 - 1e-6)) with a rising all the way; every grid raises that
+    DomainError (10 and 11 rows gave a history before)."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, _pinning
+    from adhfit.exact.stages import delamination
+    from adhfit.exact.state import Config
+    sc = EQUATOR[name]
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc.get("a_max"),
+                sc.get("delta_max"), None, 1001, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    _, on = _pinning(cfg, c, m)
+    stage = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    prev, h, reached = on, 1e-3 * on.rho_a, False
+    for _ in range(2000):
+        try:
+            st = stage.solve(prev.rho_a - h, stage.x(prev))
+        except ConvergenceError:
+            h *= 0.5  # Newton's basin shrinks toward the equator: shorter steps
+            assert h > 1e-12
+            continue
+        assert st.a >= prev.a - 1e-12 and abs(st.theta_end) < 0.5 * math.pi
+        if st.a >= c.rs * (1.0 - 1e-6):
+            reached = True
+            break
+        prev = st
+    assert reached
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="sphere's equator"):
+            adhfit.simulate(**sc, points=n, membrane="exact")
