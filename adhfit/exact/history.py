@@ -164,7 +164,20 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         c.a_max = _loading_end(stage, c)
     a_vals = _cluster(c.n_mc)[1:] * c.a_max
     x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
-    states = march(stage, a_vals, x0, stop_ok=True)
+    states = _at_values(march(stage, a_vals, x0, stop_ok=True), a_vals)
+    if not states:
+        # the first row failed from the free state (the march has no solved state to split the step from):
+        # led in on a geometric ramp from 1e-2 of it (on 10 rows the first row lies at a quarter of a_max:
+        # Newton from the free state landed past vertical at the clamp, or lost its line search, where the
+        # branch is Case I; 50 rows and more reach it)
+        lead = [float(v) for v in np.geomspace(1e-2 * a_vals[0], a_vals[0], 9)[:-1]]
+        got = march(stage, lead + list(a_vals), [free.lc, lead[0] / free.lc] + x0[2:], stop_ok=True)
+        got = _at_values(got, lead + list(a_vals))
+        states = got[len(lead):]
+        if not states and got:  # stopped on the ramp: its states show the Case I end, as the rows' do below
+            _case_one_end(stage, c, got[-1], ([*lead, *a_vals])[len(got)])
+            if len(got) > 1:
+                _case_one_in_control(stage, c, got[-2], got[-1])
     if len(states) < len(a_vals):
         if states:
             _case_one_end(stage, c, states[-1], a_vals[len(states)])
@@ -173,6 +186,16 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     states[-1] = _tight(stage, a_vals[-1], states[-1])
     return [free] + states, states[-1]
+
+
+def _at_values(states, values):
+    """The making-contact states up to the first whose contact radius is not its row's value: a march that
+    stops while splitting a step returns the state it solved at the split (``march``), not at the row
+    (seen on 10 rows: the row at a = 0.1044 was the state at 0.0979, next to the clamp's vertical, and the
+    history went on from it where every finer grid proves the Case I end before a_max)."""
+    k = next((i for i, (v, st) in enumerate(zip(values, states)) if abs(st.a - v) > 1e-9 * (1.0 + abs(v))),
+             len(states))
+    return states[:k]
 
 
 def _tight(stage, value, st):
