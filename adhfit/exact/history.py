@@ -717,6 +717,7 @@ SLACK_NEAR = 1e-3  # a frictionless pinning continuation stalled this close to a
 SLACK_LAST = 1e-10  # ... in the contact stretch, down to lambda_c - 1 = this (T1- ~ 6e-10)
 SLACK_GAP = 1e-6  # ... or to pi/2 - alpha = this (Newton's difference step in alpha is 1.6e-7)
 SLACK_STATES = 6  # ... on at least this many states
+SLACK_ANCHOR = 4.0  # ... from a state this many SLACK_GAP from pi/2 where it stalled closer
 SLACK_STEP = 0.5  # ... on steps of lambda_c - 1 by this factor (0.25 from pi/2 - 1.3e-5 did not solve)
 
 
@@ -749,6 +750,20 @@ def _slack_end(cfg, c, ctl, last):
                 1.0 - (seq[-2].lc - 1.0) / (prev.lc - 1.0)))
         seq.append(st.solve(1.0 + (prev.lc - 1.0) * r, guess))
 
+    gap = 0.5 * math.pi - last.alpha
+    if 0.0 < gap < SLACK_GAP and last.lc > 1.0:
+        # a stall closer to pi/2 than Newton's difference step allows (seen: pi/2 - 1.2e-8 on 50 rows, where
+        # 10, 11 and 200 rows stall farther out): a step back doubling lambda_c - 1 did not converge there.
+        # The branch is followed from a state at pi/2 - alpha = SLACK_ANCHOR * SLACK_GAP instead (pi/2 - alpha
+        # is linear in lambda_c - 1 along the end), as a stall there is
+        r = SLACK_ANCHOR * SLACK_GAP / gap
+        guess = [0.5 * math.pi - SLACK_ANCHOR * SLACK_GAP] + ([last.p] if len(st.unknowns) > 1 else [])
+        try:
+            last = st.solve(1.0 + (last.lc - 1.0) * r, guess)
+        except ConvergenceError:
+            return
+        if not (last.G < c.w and 0.0 < 0.5 * math.pi - last.alpha):
+            return
     down, up = [last], [last]
     try:
         # toward the end down to pi/2 - alpha = SLACK_GAP (Newton's difference step in alpha, 1.6e-7, must
