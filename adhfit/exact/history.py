@@ -164,25 +164,24 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         c.a_max = _loading_end(stage, c)
     a_vals = _cluster(c.n_mc)[1:] * c.a_max
     x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
-    states = _at_values(march(stage, a_vals, x0, stop_ok=True), a_vals)
-    if not states:
+    raw = march(stage, a_vals, x0, stop_ok=True)
+    vals = list(a_vals)
+    if not raw:
         # the first row failed from the free state (the march has no solved state to split the step from):
         # led in on a geometric ramp from 1e-2 of it (on 10 rows the first row lies at a quarter of a_max:
         # Newton from the free state landed past vertical at the clamp, or lost its line search, where the
         # branch is Case I; 50 rows and more reach it)
         lead = [float(v) for v in np.geomspace(1e-2 * a_vals[0], a_vals[0], 9)[:-1]]
-        got = march(stage, lead + list(a_vals), [free.lc, lead[0] / free.lc] + x0[2:], stop_ok=True)
-        got = _at_values(got, lead + list(a_vals))
-        states = got[len(lead):]
-        if not states and got:  # stopped on the ramp: its states show the Case I end, as the rows' do below
-            _case_one_end(stage, c, got[-1], ([*lead, *a_vals])[len(got)])
-            if len(got) > 1:
-                _case_one_in_control(stage, c, got[-2], got[-1])
+        vals = lead + vals
+        raw = march(stage, vals, [free.lc, lead[0] / free.lc] + x0[2:], stop_ok=True)
+    states = _at_values(raw, vals)[len(vals) - len(a_vals):]
     if len(states) < len(a_vals):
-        if states:
-            _case_one_end(stage, c, states[-1], a_vals[len(states)])
-        if len(states) > 1:
-            _case_one_in_control(stage, c, states[-2], states[-1])
+        # the Case I checks from the last states solved (the last one may lie at a split of the step to the
+        # next row: its own contact radius, the next row's value past it)
+        if raw:
+            _case_one_end(stage, c, raw[-1], next((v for v in vals if v > raw[-1].a * (1.0 + 1e-9)), vals[-1]))
+        if len(raw) > 1:
+            _case_one_in_control(stage, c, raw[-2], raw[-1])
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     states[-1] = _tight(stage, a_vals[-1], states[-1])
     return [free] + states, states[-1]
