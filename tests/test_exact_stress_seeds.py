@@ -469,3 +469,56 @@ def test_delamination_equator_same_on_every_grid(name):
     for n in GRIDS:
         with pytest.raises(DomainError, match="sphere's equator"):
             adhfit.simulate(**sc, points=n, membrane="exact")
+
+
+# the same proven end on every grid where 10 and 11 rows (50 for the slack end) failed or went on: a making-contact
+# row at a_max that was the state at a split of its step (a = 0.0979: history), first rows Newton could not reach
+# from the free state (PastVertical, a lost line search), a slack-end stall at pi/2 - 1.2e-8 (ConvergenceError)
+SAME_END = {
+    "mc_split_row": ({"control": "displacement", "slip": "no-slip", "p": -0.9533915972652607, "w": 4.858318180151501,
+                      "rs": 0.2856328402860007, "a_max": 0.10438553367116966, "lambda0": 1.267665063376192},
+                     "while making contact", 0.0981337),
+    "mc_first_row": ({"control": "displacement", "slip": "frictionless", "p": -0.9976723763053266,
+                      "w": 7.057175047026398, "rs": 0.13347910427346832, "a_max": 0.1161723284674687,
+                      "lambda0": 2.103087568840771}, "while making contact", 0.0145782),
+    "pin_vertical": ({"control": "displacement", "slip": "no-slip", "p": 0.9973944928658296, "w": 8.523060422933066,
+                      "rs": 10.84805243393741, "a_max": 0.6648785191341225, "lambda0": 1.8842230662667385},
+                     "turns past vertical at the clamp at alpha", 1.0195671),
+    "slack_near_half_pi": ({"control": "pressure", "slip": "frictionless", "d": 0.37644877673672195,
+                            "w": 7.0106484336706245, "rs": math.inf, "a_max": 0.5980762159198754,
+                            "lambda0": 1.2368332211288449}, "line tension at the contact edge fall to 0", None),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SAME_END))
+def test_same_proven_end_on_every_grid(name):
+    """Every grid raises the same DomainError (its bound the same to the printed digits); for the making-contact
+    ends, independently: the making-contact states solved directly (Newton from the previous one, steps of 1e-3
+    of a_max, no history logic) stay in Case I below the bound and cannot be continued to a_max in Case I."""
+    sc, words, bound = SAME_END[name]
+    for n in GRIDS:
+        with pytest.raises(DomainError, match=words) as err:
+            adhfit.simulate(**sc, points=n, membrane="exact")
+        if bound is not None:
+            assert f"{bound:.8g}"[:8] in str(err.value), n
+    if words != "while making contact":
+        return
+    from adhfit.exact.control import prepare
+    from adhfit.exact.stages import PastVertical, making_contact
+    from adhfit.exact.state import Config
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"], None,
+                None, 50, 8)
+    stage = making_contact(Config(c.lambda0, c.crv, c.n), c.control, c.p, c.d)
+    h = 1e-3 * c.a_max
+    prev = stage.solve(h, [c.free.lc, h / c.free.lc])
+    stop = bound * (1.0 - 5e-3)
+    while prev.a < stop:
+        prev = stage.solve(min(prev.a + h, stop), stage.x(prev))
+        assert abs(prev.theta_end) < 0.5 * math.pi
+    # past the bound: no Case I state (Newton either fails or lands past vertical)
+    for a in (bound * 1.002, 0.5 * (bound + c.a_max), c.a_max):
+        try:
+            st = stage.solve(a, stage.x(prev))
+        except (PastVertical, ConvergenceError):
+            continue
+        assert not abs(st.theta_end) < 0.5 * math.pi or abs(st.a - a) > 1e-9
