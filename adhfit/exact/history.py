@@ -1056,7 +1056,7 @@ def _delamination(cfg, c, m, on):
     return states, stage, None
 
 
-EQUATOR_NEAR = 0.05  # a local minimum of 1 - a/rs among delamination states below this is refined between them
+EQUATOR_NEAR = 0.05  # a sampled local minimum of 1 - a/rs along delamination below this is refined (``_equator_between``)
 
 
 def _equator_between(stage, c, sts, nxt=None):
@@ -1064,9 +1064,9 @@ def _equator_between(stage, c, sts, nxt=None):
     (``_check_membrane``), not what lies between them, and the edge can approach the equator and turn
     back inside one step (coarse rows gave a history where 1001 rows reach a = rs). Every solved state of
     the march (``sts``, on steps of at most DEL_STEP of the onset's rho_a, in path order) is checked, and
-    each sampled local minimum of the margin 1 - a/rs below ``EQUATOR_NEAR`` is refined by Brent's method
-    on solved states between its neighbours (each solved from the nearest solved one); a state whose
-    edge is at the equator (``_outside``) is raised as ``_check_membrane`` raises it. ``nxt``: the value the
+    each sampled local minimum of the margin 1 - a/rs below ``EQUATOR_NEAR`` is refined by marching the
+    branch between its neighbours on finer steps (``_equator_refine``); a state whose edge is at the
+    equator (``_outside``) is raised as ``_check_membrane`` raises it. ``nxt``: the value the
     march failed at (it stopped after ``sts[-1]``): a least margin at the last state is refined toward it.
     Returns when none is."""
     if not c.crv > 0.0 or len(sts) < 2:
