@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import adhfit
-from adhfit.errors import DomainError
+from adhfit.errors import ConvergenceError, DomainError
 from adhfit.exact import kernels as K
 from adhfit.exact.history import exact_history
 
@@ -414,3 +414,111 @@ def test_flat_turning_point_same_on_every_grid():
         tp = exact_history(**sc, points=n).summary["turning_point"]
         assert abs(tp["a"] - star.a) < 2e-8 and abs(tp["p"] - star.p) < 1e-13, n
     _same_on_every_grid(sc)
+
+
+# six frictionless scenes (displacement control) whose delamination branch carries the contact edge to the
+# sphere's equator within one step of the history's rows: on 10 and 11 rows (50 too for two of them) the
+# march stepped past it onto another branch (a falling again) and returned a history; 1001 rows prove a = rs
+EQUATOR = {
+    "s1": {"control": "displacement", "slip": "frictionless", "p": 0.36735439358701316, "w": 0.00031259301230824986,
+           "rs": 0.5124442357201477, "delta_max": 0.8728324245272762, "lambda0": 2.7655775058208825},
+    "s2": {"control": "displacement", "slip": "frictionless", "p": -0.7260345712065515, "w": 0.00014779182143689402,
+           "rs": 0.021953514749671277, "a_max": 0.019488176097841522, "lambda0": 2.0707687416907334},
+    "s4": {"control": "displacement", "slip": "frictionless", "p": 0.12151333599780623, "w": 0.0005457697824094171,
+           "rs": 0.2127047124189917, "a_max": 0.20147958717277656, "lambda0": 2.0558870159032776},
+    "s7": {"control": "displacement", "slip": "frictionless", "p": -0.6846364761243735, "w": 0.0007181046225948551,
+           "rs": 0.021001063093705464, "a_max": 0.01961404512410852, "lambda0": 1.8351783278989775},
+    "s8": {"control": "displacement", "slip": "frictionless", "p": -0.4598590942448595, "w": 0.010544557074958764,
+           "rs": 0.5266807479173881, "delta_max": 0.9111962578618391, "lambda0": 1.9154934014350846},
+    "s9": {"control": "displacement", "slip": "frictionless", "p": -0.08394176894038985, "w": 0.0014771093784706714,
+           "rs": 0.3074227678740187, "a_max": 0.2841624136451513, "lambda0": 2.472601735037768},
+}
+
+
+@pytest.mark.parametrize("name", sorted(EQUATOR))
+def test_delamination_equator_same_on_every_grid(name):
+    """Independent: the delamination branch marched here from the onset state by state (Newton from the
+    previous one, steps of 1e-3 of the onset's rho_a, no history logic) reaches a state whose contact edge
+    is at the sphere's equator (a >= rs (1 - 1e-6)) with a rising all the way; every grid raises that
+    DomainError (10 and 11 rows gave a history before)."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.history import _loading, _pinning
+    from adhfit.exact.stages import delamination
+    from adhfit.exact.state import Config
+    sc = EQUATOR[name]
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc.get("a_max"),
+                sc.get("delta_max"), None, 1001, 8)
+    cfg = Config(c.lambda0, c.crv, c.n)
+    _, m = _loading(cfg, c)
+    _, on = _pinning(cfg, c, m)
+    stage = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
+    prev, h, reached = on, 1e-3 * on.rho_a, False
+    for _ in range(2000):
+        try:
+            st = stage.solve(prev.rho_a - h, stage.x(prev))
+        except ConvergenceError:
+            h *= 0.5  # Newton's basin shrinks toward the equator: shorter steps
+            assert h > 1e-12
+            continue
+        assert st.a >= prev.a - 1e-12 and abs(st.theta_end) < 0.5 * math.pi
+        if st.a >= c.rs * (1.0 - 1e-6):
+            reached = True
+            break
+        prev = st
+    assert reached
+    for n in GRIDS:
+        with pytest.raises(DomainError, match="sphere's equator"):
+            adhfit.simulate(**sc, points=n, membrane="exact")
+
+
+# the same proven end on every grid where 10 and 11 rows (50 for the slack end) failed or went on: a making-contact
+# row at a_max that was the state at a split of its step (a = 0.0979: history), first rows Newton could not reach
+# from the free state (PastVertical, a lost line search), a slack-end stall at pi/2 - 1.2e-8 (ConvergenceError)
+SAME_END = {
+    "mc_split_row": ({"control": "displacement", "slip": "no-slip", "p": -0.9533915972652607, "w": 4.858318180151501,
+                      "rs": 0.2856328402860007, "a_max": 0.10438553367116966, "lambda0": 1.267665063376192},
+                     "while making contact", 0.0981337),
+    "mc_first_row": ({"control": "displacement", "slip": "frictionless", "p": -0.9976723763053266,
+                      "w": 7.057175047026398, "rs": 0.13347910427346832, "a_max": 0.1161723284674687,
+                      "lambda0": 2.103087568840771}, "while making contact", 0.0145782),
+    "pin_vertical": ({"control": "displacement", "slip": "no-slip", "p": 0.9973944928658296, "w": 8.523060422933066,
+                      "rs": 10.84805243393741, "a_max": 0.6648785191341225, "lambda0": 1.8842230662667385},
+                     "turns past vertical at the clamp at alpha", 1.0195671),
+    "slack_near_half_pi": ({"control": "pressure", "slip": "frictionless", "d": 0.37644877673672195,
+                            "w": 7.0106484336706245, "rs": math.inf, "a_max": 0.5980762159198754,
+                            "lambda0": 1.2368332211288449}, "line tension at the contact edge fall to 0", None),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SAME_END))
+def test_same_proven_end_on_every_grid(name):
+    """Every grid raises the same DomainError (its bound the same to the printed digits); for the making-contact
+    ends, independently: the making-contact states solved directly (Newton from the previous one, steps of 1e-3
+    of a_max, no history logic) stay in Case I below the bound and cannot be continued to a_max in Case I."""
+    sc, words, bound = SAME_END[name]
+    for n in GRIDS:
+        with pytest.raises(DomainError, match=words) as err:
+            adhfit.simulate(**sc, points=n, membrane="exact")
+        if bound is not None:
+            assert f"{bound:.8g}"[:8] in str(err.value), n
+    if words != "while making contact":
+        return
+    from adhfit.exact.control import prepare
+    from adhfit.exact.stages import PastVertical, making_contact
+    from adhfit.exact.state import Config
+    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"], None,
+                None, 50, 8)
+    stage = making_contact(Config(c.lambda0, c.crv, c.n), c.control, c.p, c.d)
+    h = 1e-3 * c.a_max
+    prev = stage.solve(h, [c.free.lc, h / c.free.lc])
+    stop = bound * (1.0 - 5e-3)
+    while prev.a < stop:
+        prev = stage.solve(min(prev.a + h, stop), stage.x(prev))
+        assert abs(prev.theta_end) < 0.5 * math.pi
+    # past the bound: no Case I state (Newton either fails or lands past vertical)
+    for a in (bound * 1.002, 0.5 * (bound + c.a_max), c.a_max):
+        try:
+            st = stage.solve(a, stage.x(prev))
+        except (PastVertical, ConvergenceError):
+            continue
+        assert not abs(st.theta_end) < 0.5 * math.pi or abs(st.a - a) > 1e-9

@@ -164,15 +164,37 @@ def _loading(cfg: Config, c: Control) -> tuple[list, State]:
         c.a_max = _loading_end(stage, c)
     a_vals = _cluster(c.n_mc)[1:] * c.a_max
     x0 = [free.lc, a_vals[0] / free.lc] + ([free.p] if c.control == "pressure" else [])
-    states = march(stage, a_vals, x0, stop_ok=True)
+    raw = march(stage, a_vals, x0, stop_ok=True)
+    vals = list(a_vals)
+    if not raw:
+        # the first row failed from the free state (the march has no solved state to split the step from):
+        # led in on a geometric ramp from 1e-2 of it (on 10 rows the first row lies at a quarter of a_max:
+        # Newton from the free state landed past vertical at the clamp, or lost its line search, where the
+        # branch is Case I; 50 rows and more reach it)
+        lead = [float(v) for v in np.geomspace(1e-2 * a_vals[0], a_vals[0], 9)[:-1]]
+        vals = lead + vals
+        raw = march(stage, vals, [free.lc, lead[0] / free.lc] + x0[2:], stop_ok=True)
+    states = _at_values(raw, vals)[len(vals) - len(a_vals):]
     if len(states) < len(a_vals):
-        if states:
-            _case_one_end(stage, c, states[-1], a_vals[len(states)])
-        if len(states) > 1:
-            _case_one_in_control(stage, c, states[-2], states[-1])
+        # the Case I checks from the last states solved (the last one may lie at a split of the step to the
+        # next row: its own contact radius, the next row's value past it)
+        if raw:
+            _case_one_end(stage, c, raw[-1], next((v for v in vals if v > raw[-1].a * (1.0 + 1e-9)), vals[-1]))
+        if len(raw) > 1:
+            _case_one_in_control(stage, c, raw[-2], raw[-1])
         march(stage, a_vals, x0)  # not shown to be the Case I limit: the march's own error
     states[-1] = _tight(stage, a_vals[-1], states[-1])
     return [free] + states, states[-1]
+
+
+def _at_values(states, values):
+    """The making-contact states up to the first whose contact radius is not its row's value: a march that
+    stops while splitting a step returns the state it solved at the split (``march``), not at the row
+    (seen on 10 rows: the row at a = 0.1044 was the state at 0.0979, next to the clamp's vertical, and the
+    history went on from it where every finer grid proves the Case I end before a_max)."""
+    k = next((i for i, (v, st) in enumerate(zip(values, states)) if abs(st.a - v) > 1e-9 * (1.0 + abs(v))),
+             len(states))
+    return states[:k]
 
 
 def _tight(stage, value, st):
@@ -694,6 +716,7 @@ SLACK_NEAR = 1e-3  # a frictionless pinning continuation stalled this close to a
 SLACK_LAST = 1e-10  # ... in the contact stretch, down to lambda_c - 1 = this (T1- ~ 6e-10)
 SLACK_GAP = 1e-6  # ... or to pi/2 - alpha = this (Newton's difference step in alpha is 1.6e-7)
 SLACK_STATES = 6  # ... on at least this many states
+SLACK_ANCHOR = 4.0  # ... from a state this many SLACK_GAP from pi/2 where it stalled closer
 SLACK_STEP = 0.5  # ... on steps of lambda_c - 1 by this factor (0.25 from pi/2 - 1.3e-5 did not solve)
 
 
@@ -726,6 +749,20 @@ def _slack_end(cfg, c, ctl, last):
                 1.0 - (seq[-2].lc - 1.0) / (prev.lc - 1.0)))
         seq.append(st.solve(1.0 + (prev.lc - 1.0) * r, guess))
 
+    gap = 0.5 * math.pi - last.alpha
+    if 0.0 < gap < SLACK_GAP and last.lc > 1.0:
+        # a stall closer to pi/2 than Newton's difference step allows (seen: pi/2 - 1.2e-8 on 50 rows, where
+        # 10, 11 and 200 rows stall farther out): a step back doubling lambda_c - 1 did not converge there.
+        # The branch is followed from a state at pi/2 - alpha = SLACK_ANCHOR * SLACK_GAP instead (pi/2 - alpha
+        # is linear in lambda_c - 1 along the end), as a stall there is
+        r = SLACK_ANCHOR * SLACK_GAP / gap
+        guess = [0.5 * math.pi - SLACK_ANCHOR * SLACK_GAP] + ([last.p] if len(st.unknowns) > 1 else [])
+        try:
+            last = st.solve(1.0 + (last.lc - 1.0) * r, guess)
+        except ConvergenceError:
+            return
+        if not (last.G < c.w and 0.0 < 0.5 * math.pi - last.alpha):
+            return
     down, up = [last], [last]
     try:
         # toward the end down to pi/2 - alpha = SLACK_GAP (Newton's difference step in alpha, 1.6e-7, must
@@ -966,6 +1003,8 @@ def _delamination(cfg, c, m, on):
     sol = march(stage, fine, stage.x(on), stop_ok=True, start=(on.rho_a, on))
     states = [sol[i] for i in keep if i < len(sol)]
     no_slip = c.slip == "no-slip"
+    cut = next((i for i, s in enumerate(sol) if no_slip and s.alpha < 0.0), len(sol))
+    _equator_between(stage, c, [on] + sol[:cut], fine[cut] if cut < len(fine) else None)
     past = None
     if no_slip:  # past alpha = 0 the membrane would enter the substrate: the branch ends there
         k = next((i for i, s in enumerate(states) if s.alpha < 0.0), len(states))
@@ -1015,6 +1054,77 @@ def _delamination(cfg, c, m, on):
         raise ConvergenceError("exact delamination: no quasi-static branch from the onset",
                                {"w": c.w, "lambda0": c.lambda0})
     return states, stage, None
+
+
+EQUATOR_NEAR = 0.05  # a sampled local minimum of 1 - a/rs along delamination below this is refined (``_equator_between``)
+
+
+def _equator_between(stage, c, sts, nxt=None):
+    """The contact edge at the sphere's equator between delamination states: the rows are checked
+    (``_check_membrane``), not what lies between them, and the edge can approach the equator and turn
+    back inside one step (coarse rows gave a history where 1001 rows reach a = rs). Every solved state of
+    the march (``sts``, on steps of at most DEL_STEP of the onset's rho_a, in path order) is checked, and
+    each sampled local minimum of the margin 1 - a/rs below ``EQUATOR_NEAR`` is refined by marching the
+    branch between its neighbours on finer steps (``_equator_refine``); a state whose edge is at the
+    equator (``_outside``) is raised as ``_check_membrane`` raises it. ``nxt``: the value the
+    march failed at (it stopped after ``sts[-1]``): a least margin at the last state is refined toward it.
+    Returns when none is."""
+    if not c.crv > 0.0 or len(sts) < 2:
+        return
+    _check_membrane(c, [("delamination", s) for s in sts[1:]])
+    par = lambda st: float(st.rho_a)  # noqa: E731
+    marg = [1.0 - st.a * c.crv for st in sts]
+    n = len(sts)
+    for j in range(n):
+        # a sampled local minimum, the march's ends included (the onset: the edge can run to the equator
+        # within the first step, seen on 10 rows where 1001 rows have it there at once)
+        left = marg[j - 1] if j > 0 else math.inf
+        right = marg[j + 1] if j + 1 < n else math.inf
+        if j == n - 1 and nxt is not None and marg[j] <= left and marg[j] < EQUATOR_NEAR:
+            # the march stopped here: the edge may reach the equator before the value it failed at
+            _equator_refine(stage, c, sts[j], float(nxt), marg[j])
+        if not (marg[j] <= left and marg[j] <= right and marg[j] < EQUATOR_NEAR):
+            continue
+        _equator_refine(stage, c, sts[max(j - 1, 0)], par(sts[min(j + 1, n - 1)]), marg[j])
+
+
+EQUATOR_SUB = 64  # ... on this many steps between its neighbours
+EQUATOR_LEVELS = 3  # ... and again about the least of them, this many times
+
+
+def _equator_refine(stage, c, s0, v1, m0):
+    """March the delamination branch from the solved state ``s0`` to rho_a = ``v1`` on ``EQUATOR_SUB`` steps in
+    rho_a (each failed step split), raising the first state whose edge is at the sphere's equator
+    (``_check_membrane``); about the least margin found (when below ``m0``, the sampled one), again, up
+    to ``EQUATOR_LEVELS`` deep. Near the equator 1 - a/rs falls steeply in rho_a (seen: from 1e-5 to
+    past 0 in 3e-4 of rho_a) and a march on the history's steps lands past it on another branch, its a
+    falling again (10 rows: 1 - a/rs = 1.8e-5 at the last state before it)."""
+    par = lambda st: float(st.rho_a)  # noqa: E731
+    for _ in range(EQUATOR_LEVELS):
+        sub = [float(v) for v in np.linspace(par(s0), v1, EQUATOR_SUB + 1)[1:]]
+        try:
+            got = march(stage, sub, stage.x(s0), stop_ok=True, start=(par(s0), s0), deep=12)
+        except ConvergenceError:
+            return
+        if not got:
+            return
+        for k, st in enumerate(got):
+            if _outside(c, st) == "equator":
+                _check_membrane(c, [("delamination", st)])
+            if k and abs(st.a - got[k - 1].a) > 0.25 * c.rs:
+                got = got[:k]  # a jump onto another branch: not followed
+                break
+        seq = [s0] + got
+        marg = [1.0 - st.a * c.crv for st in seq]
+        k = int(np.argmin(marg))
+        if not marg[k] < m0:
+            return
+        if k == len(seq) - 1:  # the least at the last state solved: toward the next value (or v1)
+            v1 = sub[len(got)] if len(got) < len(sub) else v1
+            s0 = seq[max(k - 1, 0)]
+        else:
+            s0, v1 = seq[max(k - 1, 0)], par(seq[k + 1])
+        m0 = marg[k]
 
 
 DEL_STEP = 0.05  # the longest step in rho_a of the delamination march, as a fraction of the onset's
@@ -1089,6 +1199,8 @@ def _finish(stage, states, rho, c, no_slip, on):
     fine = [base.rho_a] + list(rho[k:])
     rest = np.concatenate([np.linspace(a, b, 5)[1:] for a, b in zip(fine[:-1], fine[1:])])
     more = march(stage, rest, stage.x(base), stop_ok=True, start=(base.rho_a, base), deep=12)
+    cut = next((i for i, s in enumerate(more) if no_slip and s.alpha < 0.0), len(more))
+    _equator_between(stage, c, [base] + more[:cut], rest[cut] if cut < len(rest) else None)
     if no_slip:
         more = more[:next((i for i, s in enumerate(more) if s.alpha < 0.0), len(more))]
     kept = more[3::4]  # the history's own rows (every fourth value of the finer grid)
