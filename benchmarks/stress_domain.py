@@ -268,6 +268,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     outs = run(scenes, args.membrane, args.points, args.workers)
     rep = summarize(scenes, outs, args, time.perf_counter() - t0)
+    # the command as run (sys.argv is the caller's when stress_domain_seeds.py calls main)
+    rep["command"] = "python benchmarks/stress_domain.py " + " ".join(sys.argv[1:] if argv is None else argv)
     if args.points_check:
         picked = [sc for sc, o in zip(scenes, outs) if o["kind"] in ("success", stress.EARLY)][:args.points_check]
         with mp.get_context("spawn").Pool(args.workers) as pool:
