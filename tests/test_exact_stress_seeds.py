@@ -11,6 +11,15 @@ from adhfit.errors import ConvergenceError, DomainError
 from adhfit.exact import kernels as K
 from adhfit.exact.history import exact_history
 
+def _prepared(sc: dict, points: int = 50):
+    """The exact engine's validated scene and its solver configuration (n = 8), as a history starts."""
+    from adhfit.exact.control import prepare
+    from adhfit.exact.state import Config
+    c = prepare(sc["control"], sc["slip"], sc.get("p"), sc.get("d"), sc["w"], sc["rs"], sc["lambda0"],
+                sc.get("a_max"), sc.get("delta_max"), sc.get("p_max"), points, 8)
+    return c, Config(c.lambda0, c.crv, c.n)
+
+
 GRIDS = (10, 11, 50, 200, 1001)
 
 
@@ -73,17 +82,13 @@ def test_frictionless_pinning_ends_slack_below_w(name):
     gap d as residuals, the contact edge where the loading left it), at lambda_c - 1 = 1e-4, 1e-5, 1e-6:
     alpha within 2e-6 of pi/2 at the last, the contact tension T1- ~ 6e-6 (slack in the limit), Case I at
     the clamp, and G below w by more than 0.9 with a rise of < 1e-2 over the last two decades."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading
     from adhfit.exact.stages import Stage
-    from adhfit.exact.state import Config
     sc = SLACK[name]
     for n in GRIDS:
         with pytest.raises(DomainError, match="slack"):
             exact_history(**sc, points=n)
-    c = prepare(sc["control"], sc["slip"], None, sc["d"], sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     st = Stage(cfg, "frictionless", {"rho_a": m.rho_a}, ("alpha", "p"), ("clamp", "d"), {"d": sc["d"]}, "lc")
     guess, gs = [0.5 * math.pi - 1.6e-4, -1.0], []
@@ -159,10 +164,8 @@ def test_pinning_fold_in_d_then_alpha_zero_is_a_domain_error():
     pinning branch marched here in lambda1+ from the end of loading (alpha = 0 there; steps of 1e-3, then
     2e-5 near the fold): d rises to a maximum equal to the locator (to 1e-7), then falls, and alpha comes
     back to 0 (the membrane tangent to the sphere at the pinned edge) with G < w everywhere on the way."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading, march
     from adhfit.exact.stages import Stage
-    from adhfit.exact.state import Config
     sc = FOLD_NO_SLIP
     locs = []
     for n in GRIDS:
@@ -171,9 +174,7 @@ def test_pinning_fold_in_d_then_alpha_zero_is_a_domain_error():
         locs.append(err.value.context["locator"] if hasattr(err.value, "context") else
                     float(str(err.value).split("at most to d = ")[1].split()[0]))
     assert max(locs) - min(locs) < 1e-9
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("alpha",), ("clamp",), {}, "l1p")
     coarse = list(m.l1p - 1e-3 * np.arange(1, int((m.l1p - 0.861) / 1e-3)))
@@ -202,13 +203,9 @@ ENTERS = {"control": "displacement", "slip": "no-slip", "p": -0.782996481377277,
 def retracting_alpha_signs(sc):
     """Independent of the history's code: no-slip pinning states solved in d (unknowns lambda1+ and alpha,
     the contact field frozen at the end of loading) at d_m + h, h = +-1e-4, +-1e-3: {h: alpha}."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading
     from adhfit.exact.stages import Stage
-    from adhfit.exact.state import Config
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc.get("a_max"),
-                sc.get("delta_max"), None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     st = Stage(cfg, "given", {"rho_a": m.rho_a, "lc": m.lc, "p": sc["p"]}, ("l1p", "alpha"), ("clamp", "d"),
                {"d": m.d}, "d")
@@ -256,11 +253,9 @@ def test_delamination_meeting_vertical_steeply_is_a_domain_error_on_every_grid()
     delamination branch (G = w) continued here in the centre stretch lc (unknowns rho_a and alpha, no
     check of the clamp's tangent) from a state solved at rho_a = 0.0612 through lc steps of 1e-4: rho_a
     falls monotonically and theta_end rises through pi/2, at the locator's contact radius (to 1e-6)."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading, _pinning
     from adhfit.exact.solve import solve_state
     from adhfit.exact.stages import delamination
-    from adhfit.exact.state import Config
     sc = VERTICAL_DEL
     locs = []
     for n in GRIDS:
@@ -268,9 +263,7 @@ def test_delamination_meeting_vertical_steeply_is_a_domain_error_on_every_grid()
             exact_history(**sc, points=n)
         locs.append(float(str(err.value).split(" at a = ")[1].split()[0]))
     assert max(locs) - min(locs) < 1e-9
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     _, on = _pinning(cfg, c, m)
     st = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
@@ -306,14 +299,10 @@ def test_no_slip_pinning_rows_stay_on_their_branch():
     """Independent: the pinning branch marched here in alpha from the end of loading on steps of 1e-3
     (lambda1+ within 0.01 from step to step); every 200-row pinning row with alpha below the fold lies on it
     (lambda1+ and d interpolated in alpha, to 1e-6); the summary is the same on every grid."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading, march
     from adhfit.exact.stages import pinning
-    from adhfit.exact.state import Config
     sc = PIN_JUMP
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     st = pinning(cfg, c.control, c.slip, m, c.p, c.d)
     al = np.arange(1e-3, 2.6, 1e-3)
@@ -347,16 +336,12 @@ def test_no_slip_end_passed_between_fine_steps_on_few_rows():
     changes sign once, between rows whose linear interpolation in alpha puts the end's contact radius
     within 1e-6 of the history's ``delamination_ends_at_a`` on every grid (which agree to 1e-9); the
     summary is the same on every grid."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading, _pinning, march
     from adhfit.exact.stages import delamination
-    from adhfit.exact.state import Config
     sc = NO_SLIP_END_SKIPPED
     ends = [exact_history(**sc, points=n).inputs["delamination_ends_at_a"] for n in GRIDS]
     assert max(ends) - min(ends) < 1e-9
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     _, on = _pinning(cfg, c, m)
     st = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
@@ -383,14 +368,10 @@ def test_flat_turning_point_same_on_every_grid():
     (central differences at h = 2e-4 and 1e-4 Richardson-extrapolated, states solved to 1e-13, secant
     iterations): every grid's turning point has its contact radius within 2e-8 of it (the stencil's
     truncation) and its p within 1e-13; the summary is the same on every grid (to 1e-8)."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading, _pinning
     from adhfit.exact.stages import delamination
-    from adhfit.exact.state import Config
     sc = FLAT_TURN
-    c = prepare(sc["control"], sc["slip"], None, sc["d"], sc["w"], sc["rs"], sc["lambda0"], sc["a_max"],
-                None, None, 50, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc)
     _, m = _loading(cfg, c)
     _, on = _pinning(cfg, c, m)
     st = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
@@ -441,14 +422,10 @@ def test_delamination_equator_same_on_every_grid(name):
     previous one, steps of 1e-3 of the onset's rho_a, no history logic) reaches a state whose contact edge
     is at the sphere's equator (a >= rs (1 - 1e-6)) with a rising all the way; every grid raises that
     DomainError (10 and 11 rows gave a history before)."""
-    from adhfit.exact.control import prepare
     from adhfit.exact.history import _loading, _pinning
     from adhfit.exact.stages import delamination
-    from adhfit.exact.state import Config
     sc = EQUATOR[name]
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc.get("a_max"),
-                sc.get("delta_max"), None, 1001, 8)
-    cfg = Config(c.lambda0, c.crv, c.n)
+    c, cfg = _prepared(sc, points=1001)
     _, m = _loading(cfg, c)
     _, on = _pinning(cfg, c, m)
     stage = delamination(cfg, c.control, c.slip, m, c.w, c.p, c.d)
@@ -503,12 +480,9 @@ def test_same_proven_end_on_every_grid(name):
             assert f"{bound:.8g}"[:8] in str(err.value), n
     if words != "while making contact":
         return
-    from adhfit.exact.control import prepare
     from adhfit.exact.stages import PastVertical, making_contact
-    from adhfit.exact.state import Config
-    c = prepare(sc["control"], sc["slip"], sc["p"], None, sc["w"], sc["rs"], sc["lambda0"], sc["a_max"], None,
-                None, 50, 8)
-    stage = making_contact(Config(c.lambda0, c.crv, c.n), c.control, c.p, c.d)
+    c, cfg = _prepared(sc)
+    stage = making_contact(cfg, c.control, c.p, c.d)
     h = 1e-3 * c.a_max
     prev = stage.solve(h, [c.free.lc, h / c.free.lc])
     stop = bound * (1.0 - 5e-3)
