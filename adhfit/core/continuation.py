@@ -105,7 +105,7 @@ def _dips(s0, m0, s1, m1, s2, m2):
     curv = (d12 - d01) / (s2 - s0)
     if not curv > 0.0:
         return False
-    # vertex of m(s) = m1 + d01 (s - s1) + curv (s - s0)(s - s1)... written about s1:
+    # the parabola m0 + d01 (s - s0) + curv (s - s0)(s - s1), about s1: m1 + slope1 (s - s1) + curv (s - s1)^2
     slope1 = d01 + curv * (s1 - s0)
     sv = s1 - slope1 / (2.0 * curv)
     if not (min(s1, s2) < sv < max(s1, s2)):
